@@ -1,0 +1,3 @@
+"""crowdsim: a synthetic-crowd testbed for people perception and social robot navigation."""
+
+__version__ = "0.1.0"

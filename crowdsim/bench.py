@@ -1,0 +1,147 @@
+"""``crowdsim bench``: the speed of each hot part and of the whole loop, measured side by side in one run.
+
+Each figure is the median rate over repeated timed blocks after a warm-up block, so one slow block (another process
+waking up) does not decide it.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import time
+
+import numpy as np
+
+from scenarios import load_scenario, scenario_from_dict
+
+HALL = 40.0  # m, side of the walled hall the crowd benchmark walks in
+
+
+def _rate(fn, calls: int, blocks: int = 5) -> float:
+    """Median calls/s of ``fn`` over ``blocks`` timed blocks of ``calls`` calls (one untimed block first)."""
+    for _ in range(max(1, calls // 5)):
+        fn()
+    rates = []
+    for _ in range(blocks):
+        t = time.perf_counter()
+        for _ in range(calls):
+            fn()
+        rates.append(calls / (time.perf_counter() - t))
+    return float(np.median(rates))
+
+
+def bench_scenario(n_agents: int) -> dict:
+    """A square walled hall with four corner waypoints that ``n_agents`` walkers circle round."""
+    h = HALL
+    return scenario_from_dict({
+        "name": "bench_hall",
+        "map": {"walls": [[[0, 0], [h, 0], [h, h], [0, h], [0, 0]]]},
+        "crowd": {"max_agents": n_agents},
+        "waypoints": {f"c{k}": {"position": list(p), "radius": 2.0}
+                      for k, p in enumerate([(5, 5), (h - 5, 5), (h - 5, h - 5), (5, h - 5)])},
+        "routes": {"loop": {"waypoints": ["c0", "c1", "c2", "c3"], "sink": False}},
+        "robot": {"start": [h / 2, h / 2, 0.0]},
+        "sensors": {"lasers": [{"name": "front_laser", "mount": [0.25, 0, 0]},
+                               {"name": "rear_laser", "mount": [-0.25, 0, float(np.pi)]}]},
+    }, source="<bench hall>")
+
+
+def populated_crowd(n_agents: int, seed: int = 0):
+    """The bench hall's crowd with ``n_agents`` walkers on a jittered grid, and its scenario."""
+    from .crowd import Crowd
+
+    scenario = bench_scenario(n_agents)
+    rng = np.random.default_rng(seed)
+    crowd = Crowd(scenario, rng)
+    side = int(np.ceil(np.sqrt(n_agents)))
+    g = (np.arange(side) + 0.5) * (HALL - 2) / side + 1
+    xy = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)[:n_agents] + rng.uniform(-0.1, 0.1, (n_agents, 2))
+    crowd.add_walkers(xy, "loop")
+    return crowd, scenario
+
+
+def bench_crowd(n_agents: int, quick: bool) -> float:
+    crowd, _ = populated_crowd(n_agents)
+    return _rate(lambda: crowd.step(0.04), 5 if quick else 40 if n_agents <= 100 else 10)
+
+
+def bench_laser(n_people: int, quick: bool) -> float:
+    from sensors import Laser, Scene
+
+    crowd, scenario = populated_crowd(n_people)
+    scene = Scene(crowd.walls, 0.425, n_people)
+    pose = np.array([HALL / 2, HALL / 2, 0.0])
+    scene.sync(pose, crowd.id, crowd.pos)
+    laser = Laser(scenario["sensors"]["lasers"][0], scene, np.random.default_rng(0))
+    return _rate(lambda: laser.scan(0.0, pose), 50 if quick else 400)
+
+
+def bench_tracker(n_tracks: int, quick: bool) -> float:
+    from pipeline.tracker import NearestNeighbourTracker
+    from pipeline.types import DetectedPersons
+
+    rng = np.random.default_rng(0)
+    start = rng.uniform(0, 30, (n_tracks, 2))
+    heading = rng.uniform(-np.pi, np.pi, n_tracks)
+    vel = 1.3 * np.stack([np.cos(heading), np.sin(heading)], 1)
+    cov = np.zeros((n_tracks, 3, 3))
+    cov[:, 0, 0] = cov[:, 1, 1] = 0.1
+    cov[:, 2, 2] = 1e6
+    frames = []
+    for k in range(400):
+        pos = np.concatenate([start + vel * k * 0.04 + rng.normal(0, 0.05, (n_tracks, 2)), np.zeros((n_tracks, 1))],
+                             1)
+        frames.append(DetectedPersons(k * 0.04, "odom", "laser2d", np.arange(n_tracks) + k * n_tracks, pos, cov,
+                                      np.ones(n_tracks)))
+    tracker = NearestNeighbourTracker(frame="odom")
+    for f in frames[:10]:  # confirm the tracks first, so the timed cycles run with n_tracks tracks
+        tracker.update(f.stamp, f)
+    state = {"k": 10}
+
+    def cycle():
+        f = frames[state["k"] % len(frames)]
+        f.stamp = state["k"] * 0.04
+        tracker.update(f.stamp, f)
+        state["k"] += 1
+
+    return _rate(cycle, 50 if quick else 190 // 5)
+
+
+def bench_loop(quick: bool) -> dict:
+    from .loop import Simulation
+
+    duration = 5.0 if quick else 30.0
+    scenario = load_scenario("airport_disembarkation", duration=duration)
+    sim = Simulation(scenario)
+    sim.warm_up()
+    t = time.perf_counter()
+    n = sum(len(f.groundtruth) for f in sim.frames(duration))
+    wall = time.perf_counter() - t
+    frames = sim.timing.tracker_cycles
+    return {"realtime_factor": duration / wall, "sim_s": duration, "wall_s": wall,
+            "mean_persons_in_range": n / max(frames, 1), "tracker_hz_in_loop": frames / sim.timing.tracker_s}
+
+
+def run_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
+    figures = {}
+
+    def show(key, value, unit, what):
+        figures[key] = value
+        print(f"{what:58s} {value:12,.1f} {unit}", flush=True)
+
+    print(f"crowdsim bench on {platform.processor() or platform.machine()}, Python {platform.python_version()}"
+          f"{' (quick)' if quick else ''}")
+    show("crowd_steps_per_s_100", bench_crowd(100, quick), "steps/s", "crowd step, 100 agents (dt 0.04 s)")
+    show("crowd_steps_per_s_1000", bench_crowd(1000, quick), "steps/s", "crowd step, 1000 agents (dt 0.04 s)")
+    show("laser_scans_per_s_100", bench_laser(100, quick), "scans/s", "laser scan, 381 beams, 100 people")
+    show("tracker_cycles_per_s_30", bench_tracker(30, quick), "cycles/s", "tracker cycle, 30 tracks")
+    show("tracker_cycles_per_s_80", bench_tracker(80, quick), "cycles/s", "tracker cycle, 80 tracks")
+    loop = bench_loop(quick)
+    show("loop_realtime_factor", loop["realtime_factor"], "x real time",
+         f"airport loop, 2 lasers @25 Hz + tracker + CLEAR-MOT ({loop['mean_persons_in_range']:.0f} in range)")
+    figures["loop"] = loop
+    if json_path:
+        with open(json_path, "w") as f:
+            json.dump(figures, f, indent=2)
+            f.write("\n")
+    return figures

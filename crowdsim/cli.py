@@ -1,0 +1,76 @@
+"""The ``crowdsim`` command: run, scenarios, bench."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+
+def _cmd_run(args) -> int:
+    from scenarios import load_scenario
+
+    from .run import check_out_dir, run, summary_table
+
+    scenario = load_scenario(args.scenario, seed=args.seed, duration=args.duration)
+    out = Path(args.out) if args.out else Path("runs") / f"{scenario['name']}-{time.strftime('%Y%m%d-%H%M%S')}"
+    check_out_dir(out)
+    metrics = run(scenario, out, rrd=args.rrd, progress=not args.quiet)
+    print(summary_table(metrics))
+    gt = metrics["groundtruth"]
+    print(f"persons within range: {gt['mean_persons_in_range']:.1f} mean, {gt['max_persons_in_range']} max; "
+          f"results in {out}/")
+    return 0
+
+
+def _cmd_scenarios(args) -> int:
+    from scenarios import bundled_scenarios
+
+    for name, description in bundled_scenarios().items():
+        print(f"{name:28s} {description}")
+    return 0
+
+
+def _cmd_bench(args) -> int:
+    from .bench import run_benchmarks
+
+    run_benchmarks(json_path=args.json, quick=args.quick)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="crowdsim", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("run", help="simulate a scenario, track, score, and write a run directory")
+    p.add_argument("scenario", help="a bundled scenario name (see `crowdsim scenarios`) or a YAML file")
+    p.add_argument("--seed", type=int, help="override the scenario's seed")
+    p.add_argument("--duration", type=float, help="override the scenario's duration (simulated seconds)")
+    p.add_argument("--out", help="output directory (default runs/<scenario>-<time>); must be new or empty")
+    p.add_argument("--rrd", action="store_true", help="also write a rerun recording, recording.rrd")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_run)
+    p = sub.add_parser("scenarios", help="list the bundled scenarios")
+    p.set_defaults(func=_cmd_scenarios)
+    p = sub.add_parser("bench", help="measure the crowd, the lasers, the tracker and the whole loop")
+    p.add_argument("--json", help="also write the figures to this JSON file")
+    p.add_argument("--quick", action="store_true", help="shorter measurements (for a smoke test)")
+    p.set_defaults(func=_cmd_bench)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    from scenarios import ScenarioError
+
+    from .run import RunDirError
+
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except (ScenarioError, RunDirError) as e:
+        print(f"crowdsim: error: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

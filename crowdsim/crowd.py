@@ -1,0 +1,342 @@
+"""The pedestrian crowd: a vectorized social-force model (Helbing & Molnar 1995) with sources, routes and sinks.
+
+Every per-step computation works on arrays over agents or over neighbour pairs found with a k-d tree, so a step
+costs O(N log N), not O(N^2). Social forces steer; a position-based contact pass afterwards keeps bodies out of
+walls and (almost) out of each other, which the force model alone does not guarantee.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from scenarios.geometry import closest_on_segments, wall_segments
+
+CONTACT_ITERATIONS = 4
+ARRIVAL_RADIUS = 0.3  # m: standing people slow down within this distance of their spot, and return to it when pushed
+
+
+@dataclass
+class AgentStates:
+    """Ground truth of every person alive at ``stamp`` (world frame)."""
+
+    stamp: float
+    id: np.ndarray  # [n] int64
+    position: np.ndarray  # [n, 2]
+    velocity: np.ndarray  # [n, 2]
+    goal: np.ndarray  # [n, 2]
+    group_id: np.ndarray  # [n] int64, -1 when alone
+    walked: np.ndarray  # [n] metres walked so far (drives the gait phase)
+    radius: np.ndarray  # [n]
+
+
+@dataclass
+class _Source:
+    position: np.ndarray
+    size: np.ndarray
+    rate: float
+    start: float
+    stop: float
+    route_ids: np.ndarray
+    route_p: np.ndarray
+    size_p: np.ndarray
+    next_time: float
+
+
+class Crowd:
+    """The persons of one scenario; ``step(dt)`` advances them, ``states()`` reports the ground truth."""
+
+    def __init__(self, scenario: dict, rng: np.random.Generator):
+        self.p = scenario["crowd"]
+        self.rng = rng
+        self.t = 0.0
+        self.walls = wall_segments(scenario)
+        self._next_id = 1
+        self._next_group = 1
+        names = self.route_names = list(scenario["routes"])
+        wps = scenario["waypoints"]
+        length = max((len(r["waypoints"]) for r in scenario["routes"].values()), default=1)
+        self.route_goal = np.zeros((max(len(names), 1), length, 2))
+        self.route_radius = np.ones((max(len(names), 1), length))
+        self.route_len = np.zeros(max(len(names), 1), np.int64)
+        self.route_sink = np.zeros(max(len(names), 1), bool)
+        for k, name in enumerate(names):
+            route = scenario["routes"][name]
+            for i, wp in enumerate(route["waypoints"]):
+                self.route_goal[k, i] = wps[wp]["position"]
+                self.route_radius[k, i] = wps[wp]["radius"]
+            self.route_len[k] = len(route["waypoints"])
+            self.route_sink[k] = route["sink"]
+        self.sources = []
+        for s in scenario["sources"]:
+            weights = np.array(list(s["routes"].values()), float)
+            sizes = np.array(s["group_size_weights"], float)
+            size_p = sizes / sizes.sum()
+            mean_size = float((np.arange(1, sizes.size + 1) * size_p).sum())
+            src = _Source(np.array(s["position"]), np.array(s["size"]), s["rate"] / mean_size, s["start"], s["stop"],
+                          np.array([names.index(r) for r in s["routes"]]), weights / weights.sum(), size_p, np.inf)
+            src.next_time = src.start + self._interval(src)
+            self.sources.append(src)
+        n = 0
+        self.id = np.zeros(n, np.int64)
+        self.pos = np.zeros((n, 2))
+        self.vel = np.zeros((n, 2))
+        self.v0 = np.zeros(n)
+        self.radius = np.zeros(n)
+        self.group = np.zeros(n, np.int64)
+        self.route = np.zeros(n, np.int64)  # -1: standing at ``goal``
+        self.wp = np.zeros(n, np.int64)
+        self.goal = np.zeros((n, 2))
+        self.goal_radius = np.zeros(n)
+        self.walked = np.zeros(n)
+        for g in scenario["standing"]:
+            self._add_standing(np.array(g["position"], float), g["count"], g["spacing"])
+
+    # -- population ---------------------------------------------------------------------------------------------
+
+    def _interval(self, src: _Source) -> float:
+        return float(self.rng.exponential(1.0 / src.rate)) if src.rate > 0 else np.inf
+
+    def _desired_speeds(self, n: int) -> np.ndarray:
+        p = self.p
+        v = self.rng.normal(p["desired_speed_mean"], p["desired_speed_std"], n)
+        return np.clip(v, p["desired_speed_min"], p["desired_speed_max"])
+
+    def _append(self, pos, v0, group, route, goal, goal_radius):
+        n = len(pos)
+        self.id = np.concatenate([self.id, np.arange(self._next_id, self._next_id + n)])
+        self._next_id += n
+        self.pos = np.concatenate([self.pos, pos])
+        self.vel = np.concatenate([self.vel, np.zeros((n, 2))])
+        self.v0 = np.concatenate([self.v0, v0])
+        self.radius = np.concatenate([self.radius, np.full(n, self.p["radius"])])
+        self.group = np.concatenate([self.group, np.full(n, group, np.int64)])
+        self.route = np.concatenate([self.route, np.full(n, route, np.int64)])
+        self.wp = np.concatenate([self.wp, np.zeros(n, np.int64)])
+        self.goal = np.concatenate([self.goal, goal])
+        self.goal_radius = np.concatenate([self.goal_radius, goal_radius])
+        self.walked = np.concatenate([self.walked, np.zeros(n)])
+
+    def add_walkers(self, positions: np.ndarray, route: str, desired_speed: float | None = None,
+                    group: bool = False) -> np.ndarray:
+        """Place persons at ``positions`` [n, 2] on the named route (for tests, benchmarks and scripted scenes);
+        returns their ids. Without ``desired_speed`` each draws their own."""
+        k = self.route_names.index(route)
+        n = len(positions)
+        v0 = np.full(n, desired_speed) if desired_speed is not None else self._desired_speeds(n)
+        self._append(np.asarray(positions, float), v0, self._new_group_id(n) if group else -1, k,
+                     np.repeat(self.route_goal[k, :1], n, 0), np.full(n, self.route_radius[k, 0]))
+        return self.id[-n:].copy()
+
+    def _new_group_id(self, size: int) -> int:
+        if size < 2:
+            return -1
+        self._next_group += 1
+        return self._next_group - 1
+
+    def _add_standing(self, centre: np.ndarray, count: int, spacing: float):
+        if count == 1:
+            pos = centre[None]
+        else:
+            ring = spacing / (2 * np.sin(np.pi / count))
+            a = 2 * np.pi * np.arange(count) / count + self.rng.uniform(0, 2 * np.pi)
+            pos = centre + ring * np.stack([np.cos(a), np.sin(a)], 1)
+        self._append(pos, self._desired_speeds(count), self._new_group_id(count), -1, pos.copy(), np.full(count, 0.1))
+
+    def _emit(self, src: _Source) -> bool:
+        """Emit one group at ``src`` if its area is clear; False when it must wait."""
+        size = 1 + int(self.rng.choice(src.size_p.size, p=src.size_p))
+        route = int(src.route_ids[self.rng.choice(src.route_ids.size, p=src.route_p)])
+        r = self.p["radius"]
+        centre = src.position + self.rng.uniform(-0.5, 0.5, 2) * np.maximum(src.size - 2 * r, 0)
+        heading = self.route_goal[route, 0] - centre
+        side = np.array([-heading[1], heading[0]]) / max(np.linalg.norm(heading), 1e-9)
+        offsets = (np.arange(size) - (size - 1) / 2) * (2 * r + 0.1)
+        pos = centre + offsets[:, None] * side
+        if len(self.pos) + size > self.p["max_agents"]:
+            return False
+        if len(self.pos) and np.min(np.linalg.norm(pos[:, None] - self.pos[None], axis=-1)) < 2 * r + 0.05:
+            return False
+        v0 = np.full(size, self._desired_speeds(1)[0]) if size > 1 else self._desired_speeds(1)
+        self._append(pos, v0, self._new_group_id(size), route, np.repeat(self.route_goal[route, :1], size, 0),
+                     np.full(size, self.route_radius[route, 0]))
+        return True
+
+    def _run_sources(self):
+        for src in self.sources:
+            while src.next_time <= self.t and src.next_time <= src.stop:
+                if not self._emit(src):
+                    src.next_time = self.t + 0.2  # area occupied: try again shortly
+                    break
+                src.next_time += self._interval(src)
+
+    def _remove(self, keep: np.ndarray):
+        for name in ("id", "pos", "vel", "v0", "radius", "group", "route", "wp", "goal", "goal_radius", "walked"):
+            setattr(self, name, getattr(self, name)[keep])
+
+    def _advance_waypoints(self):
+        walking = self.route >= 0
+        reached = walking & (np.linalg.norm(self.goal - self.pos, axis=1) < self.goal_radius)
+        if not reached.any():
+            return
+        self.wp[reached] += 1
+        done = reached & (self.wp >= self.route_len[np.maximum(self.route, 0)])
+        sink = done & self.route_sink[np.maximum(self.route, 0)]
+        self.wp[done & ~sink] = 0
+        idx = np.flatnonzero(reached & ~sink)
+        self.goal[idx] = self.route_goal[self.route[idx], self.wp[idx]]
+        self.goal_radius[idx] = self.route_radius[self.route[idx], self.wp[idx]]
+        if sink.any():
+            self._remove(~sink)
+
+    # -- forces -------------------------------------------------------------------------------------------------
+
+    def _in_view_weight(self, direction: np.ndarray, force: np.ndarray) -> np.ndarray:
+        """HM 1995 anisotropy: full weight for sources within the field of view, c for those behind."""
+        p = self.p
+        norm = np.linalg.norm(force, axis=-1)
+        seen = np.einsum("...k,...k->...", direction, -force) >= norm * np.cos(np.radians(p["fov_deg"]) / 2)
+        return np.where(seen, 1.0, p["out_of_view_weight"])
+
+    def desired_direction(self) -> tuple[np.ndarray, np.ndarray]:
+        """Unit vectors towards the current goals and the desired speeds (standing people slow to their spot)."""
+        to_goal = self.goal - self.pos
+        dist = np.linalg.norm(to_goal, axis=1)
+        e = to_goal / np.maximum(dist, 1e-9)[:, None]
+        speed = np.where(self.route >= 0, self.v0, self.v0 * np.clip(dist / ARRIVAL_RADIUS, 0.0, 1.0))
+        return e, speed
+
+    def agent_forces(self, e: np.ndarray) -> np.ndarray:
+        """HM 1995 elliptical repulsion between neighbours, summed per agent (component arrays: it is the hot loop)."""
+        p = self.p
+        n = len(self.pos)
+        if n < 2:
+            return np.zeros((n, 2))
+        pairs = cKDTree(self.pos).query_pairs(p["interaction_range"], output_type="ndarray")
+        if len(pairs) == 0:
+            return np.zeros((n, 2))
+        i = np.concatenate([pairs[:, 0], pairs[:, 1]])
+        j = np.concatenate([pairs[:, 1], pairs[:, 0]])
+        rx, ry = self.pos[i, 0] - self.pos[j, 0], self.pos[i, 1] - self.pos[j, 1]
+        vx, vy = self.vel[j, 0], self.vel[j, 1]
+        speed_j = np.sqrt(vx * vx + vy * vy)
+        step = speed_j * p["step_time"]
+        scale = p["step_time"]  # y = r - step * v_j / |v_j| = r - step_time * v_j
+        yx, yy = rx - scale * vx, ry - scale * vy
+        nr = np.maximum(np.sqrt(rx * rx + ry * ry), 1e-6)
+        ny = np.maximum(np.sqrt(yx * yx + yy * yy), 1e-6)
+        b = 0.5 * np.sqrt(np.maximum((nr + ny) ** 2 - step**2, 0.0))
+        b = np.maximum(b, 0.05)  # keeps the gradient finite when i stands exactly in j's path
+        mag = p["agent_strength"] / p["agent_range"] * np.exp(-b / p["agent_range"]) * (nr + ny) / (4 * b)
+        fx = mag * (rx / nr + yx / ny)
+        fy = mag * (ry / nr + yy / ny)
+        # HM 1995 anisotropy: full weight when the source lies within the field of view, c otherwise
+        fn = np.sqrt(fx * fx + fy * fy)
+        seen = -(e[i, 0] * fx + e[i, 1] * fy) >= fn * np.cos(np.radians(p["fov_deg"]) / 2)
+        w = np.where(seen, 1.0, p["out_of_view_weight"])
+        return np.stack([np.bincount(i, w * fx, n), np.bincount(i, w * fy, n)], axis=1)
+
+    def wall_forces(self, e: np.ndarray) -> np.ndarray:
+        """HM 1995 exponential repulsion from every wall segment within range (not only the nearest)."""
+        p = self.p
+        if len(self.walls) == 0 or len(self.pos) == 0:
+            return np.zeros_like(self.pos)
+        away, dist = closest_on_segments(self.pos, self.walls)
+        near = dist < p["wall_interaction_range"]
+        mag = np.where(near, p["wall_strength"] / p["wall_range"] * np.exp(-dist / p["wall_range"]), 0.0)
+        f = mag[..., None] * away / np.maximum(dist, 1e-9)[..., None]
+        f *= self._in_view_weight(e[:, None, :], f)[..., None]
+        return f.sum(axis=1)
+
+    def robot_forces(self, e: np.ndarray, robot_pos: np.ndarray, robot_radius: float) -> np.ndarray:
+        p = self.p
+        away = self.pos - robot_pos
+        dist = np.maximum(np.linalg.norm(away, axis=1), 1e-9)
+        gap = np.maximum(dist - robot_radius, 0.0)
+        f = (p["robot_strength"] / p["wall_range"] * np.exp(-gap / p["wall_range"]))[:, None] * away / dist[:, None]
+        return f * self._in_view_weight(e, f)[:, None]
+
+    def group_forces(self) -> np.ndarray:
+        """Moussaid et al. 2010 coherence: walking group members beyond (N-1)/2 m of the centroid are pulled back."""
+        walking_group = (self.group >= 0) & (self.route >= 0)
+        f = np.zeros_like(self.pos)
+        if not walking_group.any():
+            return f
+        idx = np.flatnonzero(walking_group)
+        _, inv, counts = np.unique(self.group[idx], return_inverse=True, return_counts=True)
+        centroid = np.stack([np.bincount(inv, self.pos[idx, k]) for k in (0, 1)], 1) / counts[:, None]
+        to_c = centroid[inv] - self.pos[idx]
+        dist = np.linalg.norm(to_c, axis=1)
+        pull = dist > (counts[inv] - 1) / 2
+        f[idx[pull]] = self.p["group_attraction"] * to_c[pull] / dist[pull, None]
+        return f
+
+    # -- contacts -----------------------------------------------------------------------------------------------
+
+    def _resolve_contacts(self, robot_pos: np.ndarray | None, robot_radius: float):
+        """Position-based contact pass: separate overlapping bodies, then push everyone out of walls and robot."""
+        pos = self.pos
+        # candidates found once with a margin: bodies move far less than it within the pass
+        pairs = (cKDTree(pos).query_pairs(2 * self.radius.max() + 0.1, output_type="ndarray") if len(pos) > 1
+                 else np.zeros((0, 2), np.int64))
+        for _ in range(CONTACT_ITERATIONS):
+            if len(pairs):
+                i, j = pairs[:, 0], pairs[:, 1]
+                d = pos[i] - pos[j]
+                dist = np.maximum(np.linalg.norm(d, axis=1), 1e-9)
+                overlap = self.radius[i] + self.radius[j] - dist
+                hit = overlap > 0
+                push = (0.5 * overlap[hit] / dist[hit])[:, None] * d[hit]
+                shift = np.zeros_like(pos)
+                np.add.at(shift, i[hit], push)
+                np.add.at(shift, j[hit], -push)
+                pos += shift
+            if robot_pos is not None:
+                away = pos - robot_pos
+                dist = np.maximum(np.linalg.norm(away, axis=1), 1e-9)
+                overlap = np.maximum(robot_radius + self.radius - dist, 0.0)
+                pos += (overlap / dist)[:, None] * away
+            self._push_out_of_walls(pos)
+
+    def _push_out_of_walls(self, pos: np.ndarray):
+        if len(self.walls) == 0 or len(pos) == 0:
+            return
+        for _ in range(CONTACT_ITERATIONS):
+            away, dist = closest_on_segments(pos, self.walls)
+            depth = self.radius[:, None] - dist
+            if not (depth > 0).any():
+                return
+            n_hat = away / np.maximum(dist, 1e-12)[..., None]
+            push = np.where(depth > 0, depth, 0.0)[..., None] * n_hat
+            # the deepest wall first: summing pushes from two walls of a corner would over-correct
+            k = np.argmax(depth, axis=1)
+            pos += push[np.arange(len(pos)), k]
+
+    # -- stepping -----------------------------------------------------------------------------------------------
+
+    def step(self, dt: float, robot_pos: np.ndarray | None = None, robot_radius: float = 0.0) -> None:
+        self._run_sources()
+        n = len(self.pos)
+        if n:
+            e, speed = self.desired_direction()
+            acc = (speed[:, None] * e - self.vel) / self.p["relaxation_time"]
+            acc += self.agent_forces(e) + self.wall_forces(e) + self.group_forces()
+            if robot_pos is not None:
+                acc += self.robot_forces(e, robot_pos, robot_radius)
+            vel = self.vel + acc * dt
+            vmax = self.p["max_speed_factor"] * self.v0
+            s = np.linalg.norm(vel, axis=1)
+            vel *= np.minimum(1.0, vmax / np.maximum(s, 1e-9))[:, None]
+            before = self.pos.copy()
+            self.pos = self.pos + vel * dt
+            self._resolve_contacts(robot_pos, robot_radius)
+            self.vel = (self.pos - before) / dt
+            self.walked += np.linalg.norm(self.pos - before, axis=1)
+        self.t += dt
+        self._advance_waypoints()
+
+    def states(self) -> AgentStates:
+        return AgentStates(self.t, self.id.copy(), self.pos.copy(), self.vel.copy(), self.goal.copy(),
+                           self.group.copy(), self.walked.copy(), self.radius.copy())

@@ -1,0 +1,156 @@
+"""The one place that wires a scenario, the crowd, the robot, the sensors, the pipeline and the evaluation together.
+
+``Simulation.frames`` yields one ``Frame`` per tracking cycle; whoever consumes it (the run command, a test, a
+dataset writer) decides what to keep. Every random draw comes from streams spawned from the scenario seed, one per
+component, so adding a sensor does not change the crowd.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from evaluation import ClearMot, FrameResult
+from pipeline.fusion import fuse, to_frame
+from pipeline.frames import inverse, transform_points
+from pipeline.laser_detector import SegmentDetector
+from pipeline.tracker import NearestNeighbourTracker, TrackerParams
+from pipeline.types import DetectedPersons, LaserScan, TrackedPersons
+from scenarios.geometry import line_of_sight, wall_segments
+from sensors import Laser, Scene
+
+from .crowd import AgentStates, Crowd
+from .robot import Robot
+
+TRACKING_FRAME = "odom"
+
+
+@dataclass
+class Frame:
+    """Everything that happened at one tracking cycle."""
+
+    index: int
+    stamp: float
+    robot_pose: np.ndarray  # world
+    world_T_odom: np.ndarray  # the true transform, for display and scoring
+    agents: AgentStates  # all persons, world frame
+    scans: list[LaserScan]
+    detections: DetectedPersons  # fused, odom
+    tracks: TrackedPersons  # odom
+    groundtruth: TrackedPersons  # persons within range, odom
+    score: FrameResult
+
+
+@dataclass
+class Timing:
+    wall_s: float = 0.0
+    tracker_s: float = 0.0
+    tracker_cycles: int = 0
+    sensors_s: float = 0.0
+    crowd_s: float = 0.0
+
+
+class Simulation:
+    def __init__(self, scenario: dict):
+        self.scenario = scenario
+        streams = np.random.SeedSequence(scenario["seed"]).spawn(3 + len(scenario["sensors"]["lasers"]))
+        rngs = [np.random.default_rng(s) for s in streams]
+        self.crowd = Crowd(scenario, rngs[0])
+        self.robot = Robot(scenario["robot"], rngs[1])
+        self.walls = wall_segments(scenario)
+        self.scene = Scene(self.walls, scenario["robot"]["radius"], scenario["crowd"]["max_agents"])
+        self.lasers = [Laser(p, self.scene, rngs[3 + k]) for k, p in enumerate(scenario["sensors"]["lasers"])]
+        pipe = scenario["pipeline"]
+        self.detectors = [SegmentDetector(pipe["detector"]) for _ in self.lasers]
+        tracker_params = {k: v for k, v in pipe["tracker"].items() if v is not None}
+        self.tracker = NearestNeighbourTracker(TrackerParams(**tracker_params), frame=TRACKING_FRAME)
+        ev = scenario["evaluation"]
+        self.clearmot = ClearMot(ev["threshold"])
+        self.max_range = ev["max_range"]
+        self.dt = scenario["dt"]
+        self.timing = Timing()
+        self._next_scan = np.zeros(len(self.lasers))
+        self._fused_ids = 0
+        self._frame = 0
+        self._last_scans: list[LaserScan] = []
+
+    def warm_up(self) -> None:
+        """Crowd-only simulation for the scenario's warm-up, with the robot standing at its start."""
+        steps = int(round(self.scenario["warmup"] / self.dt))
+        for _ in range(steps):
+            self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p["radius"])
+        self._next_scan[:] = self.crowd.t
+
+    def _front_clearance(self) -> float:
+        """Distance to the nearest laser return in the robot's path (a corridor as wide as the robot)."""
+        best = np.inf
+        for laser, scan in zip(self.lasers, self._last_scans):
+            pts = transform_points(laser.mount, scan.points())
+            ahead = (pts[:, 0] > 0) & (np.abs(pts[:, 1]) < self.robot.p["radius"] + 0.1)
+            if ahead.any():
+                best = min(best, float(pts[ahead, 0].min()) - self.robot.p["radius"])
+        return best
+
+    def _groundtruth(self, agents: AgentStates) -> TrackedPersons:
+        """Every person within range whose line of sight from the robot no wall cuts (people may hide people)."""
+        near = np.linalg.norm(agents.position - self.robot.pose[:2], axis=1) <= self.max_range
+        near[near] = line_of_sight(self.robot.pose[:2], agents.position[near], self.walls)
+        odom_T_world = inverse(self.robot.world_T_odom)
+        pos = transform_points(odom_T_world, agents.position[near])
+        c, s = np.cos(odom_T_world[2]), np.sin(odom_T_world[2])
+        vel = agents.velocity[near] @ np.array([[c, s], [-s, c]])
+        n = int(near.sum())
+        zeros = np.zeros((n, 2, 2))
+        return TrackedPersons(agents.stamp, TRACKING_FRAME, agents.id[near], np.ones(n, bool), np.zeros(n, bool),
+                              np.full(n, -1, np.int64), pos, vel, zeros, zeros.copy(), np.zeros(n),
+                              agents.group_id[near])
+
+    def step(self) -> Frame | None:
+        """Advance one tick; return a Frame when a tracking cycle ran in it."""
+        t0 = time.perf_counter()
+        v, omega = self.robot.drive_command(self._front_clearance())
+        self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p["radius"])
+        self.robot.step(v, omega, self.dt)
+        t1 = time.perf_counter()
+        self.timing.crowd_s += t1 - t0
+        stamp = self.crowd.t
+        due = [k for k in range(len(self.lasers)) if self._next_scan[k] <= stamp + 1e-9]
+        if not due:
+            self.timing.wall_s += t1 - t0
+            return None
+        agents = self.crowd.states()
+        self.scene.sync(self.robot.pose, agents.id, agents.position)
+        scans, batches = [], []
+        for k in due:
+            self._next_scan[k] += self.lasers[k].period
+            scan = self.lasers[k].scan(stamp, self.robot.pose)
+            scans.append(scan)
+            odom_T_laser = self.lasers[k].pose_in(self.robot.odom_pose)
+            batches.append(to_frame(self.detectors[k].detect(scan), odom_T_laser, TRACKING_FRAME))
+        if len(due) == len(self.lasers):
+            self._last_scans = scans
+        t2 = time.perf_counter()
+        self.timing.sensors_s += t2 - t1
+        detections = fuse(batches, self.scenario["pipeline"]["fusion_distance"], self._fused_ids)
+        self._fused_ids += len(detections)
+        t3 = time.perf_counter()
+        tracks = self.tracker.update(stamp, detections)
+        self.timing.tracker_s += time.perf_counter() - t3
+        self.timing.tracker_cycles += 1
+        gt = self._groundtruth(agents)
+        score = self.clearmot.update(gt.track_id, gt.position, tracks.track_id, tracks.position)
+        frame = Frame(self._frame, stamp, self.robot.pose.copy(), self.robot.world_T_odom, agents, scans,
+                      detections, tracks, gt, score)
+        self._frame += 1
+        self.timing.wall_s += time.perf_counter() - t0
+        return frame
+
+    def frames(self, duration: float):
+        """Yield the Frames of ``duration`` seconds of simulated time (after the warm-up)."""
+        steps = int(round(duration / self.dt))
+        for _ in range(steps):
+            frame = self.step()
+            if frame is not None:
+                yield frame

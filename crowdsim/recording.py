@@ -1,0 +1,67 @@
+"""A rerun recording of a run on a sim-time timeline: walls, ground-truth people, laser points, detections, tracks.
+
+Everything is logged in the world frame (tracks and detections are moved there with the true odom transform) so
+the scene reads as one picture; the robot and its odometry frame are shown as well.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import rerun as rr
+
+from pipeline.frames import compose, transform_points
+
+from .loop import Frame
+
+
+def covariance_ellipses(centres: np.ndarray, covs: np.ndarray, sigma: float = 2.0, n: int = 24) -> np.ndarray:
+    """Outlines [k, n, 2] of the ``sigma`` ellipses of 2x2 covariances, for drawing."""
+    vals, vecs = np.linalg.eigh(covs)
+    t = np.linspace(0, 2 * np.pi, n)
+    circle = np.stack([np.cos(t), np.sin(t)], 0)  # [2, n]
+    axes = vecs * (sigma * np.sqrt(np.maximum(vals, 0)))[:, None, :]
+    return centres[:, None, :] + np.einsum("kij,jn->kni", axes, circle)
+
+
+class Recording:
+    def __init__(self, path, walls: np.ndarray, lasers):
+        self.rec = rr.RecordingStream("crowdsim")
+        self.rec.save(str(path))
+        self.lasers = lasers
+        self.rec.log("world/walls", rr.LineStrips2D(list(walls), colors=[90, 90, 100]), static=True)
+
+    def log(self, frame: Frame) -> None:
+        rec = self.rec
+        rec.set_time("sim_time", duration=frame.stamp)
+        a = frame.agents
+        rec.log("world/people", rr.Points2D(a.position, radii=a.radius, colors=[150, 150, 150],
+                                            labels=[str(i) for i in a.id]))
+        pose = frame.robot_pose
+        rec.log("world/robot", rr.Points2D(pose[None, :2], radii=0.425, colors=[40, 70, 200]))
+        rec.log("world/robot/heading", rr.Arrows2D(origins=pose[None, :2],
+                                                   vectors=[[0.8 * np.cos(pose[2]), 0.8 * np.sin(pose[2])]]))
+        points = []
+        for laser, scan in zip(self.lasers, frame.scans):
+            p = scan.points()
+            points.append(transform_points(laser.pose_in(pose), p[np.isfinite(p[:, 0])]))
+        if points:
+            rec.log("world/laser_points", rr.Points2D(np.concatenate(points), radii=0.03, colors=[230, 60, 60]))
+        w = frame.world_T_odom
+        det = transform_points(w, frame.detections.position[:, :2])
+        rec.log("world/detections", rr.Points2D(det, radii=0.12, colors=[255, 200, 0]))
+        tr = frame.tracks
+        pos = transform_points(w, tr.position)
+        c, s = np.cos(w[2]), np.sin(w[2])
+        rot = np.array([[c, -s], [s, c]])
+        vel = tr.velocity @ rot.T
+        cov = rot @ tr.position_covariance @ rot.T
+        ids = tr.track_id.astype(int)
+        rec.log("world/tracks", rr.Points2D(pos, radii=0.2, class_ids=ids % 256, labels=[f"T{i}" for i in ids]))
+        rec.log("world/tracks/velocity", rr.Arrows2D(origins=pos, vectors=vel, class_ids=ids % 256))
+        rec.log("world/tracks/covariance", rr.LineStrips2D(list(covariance_ellipses(pos, cov)), class_ids=ids % 256))
+        rec.log("world/odom", rr.Arrows2D(origins=[w[:2]] * 2, vectors=[compose(w, [1, 0, 0])[:2] - w[:2],
+                                                                       compose(w, [0, 1, 0])[:2] - w[:2]],
+                                          colors=[[255, 0, 0], [0, 255, 0]]))
+
+    def close(self) -> None:
+        self.rec.flush()

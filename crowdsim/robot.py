@@ -1,0 +1,67 @@
+"""The robot: differential-drive kinematics, wheel odometry, and a route driver with a laser safety stop."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.frames import compose, inverse, wrap_angle
+
+
+class Robot:
+    """True pose in ``world``; odometry pose in ``odom`` (which starts at the robot's start pose)."""
+
+    def __init__(self, params: dict, rng: np.random.Generator):
+        self.p = params
+        self.rng = rng
+        self.pose = np.array(params["start"], float)
+        self.odom_pose = np.zeros(3)
+        self.velocity = np.zeros(2)  # (v, omega) executed last step
+        self.route = np.asarray(params["route"], float) if params["route"] else np.zeros((0, 2))
+        self.target = 0
+
+    @property
+    def world_T_odom(self) -> np.ndarray:
+        """The true transform from odom to world: where odometry believes the robot is, made to fit the truth."""
+        return compose(self.pose, inverse(self.odom_pose))
+
+    def step(self, v: float, omega: float, dt: float) -> None:
+        """Move by the command (clipped to the limits) with exact arc integration; integrate noisy odometry."""
+        v = float(np.clip(v, -self.p["max_speed"], self.p["max_speed"]))
+        omega = float(np.clip(omega, -self.p["max_angular_speed"], self.p["max_angular_speed"]))
+        self.pose = compose(self.pose, arc(v, omega, dt))
+        sigma = self.p["odometry_noise"]
+        if sigma > 0:
+            v_m, w_m = v * (1 + sigma * self.rng.normal()), omega * (1 + sigma * self.rng.normal())
+        else:
+            v_m, w_m = v, omega
+        self.odom_pose = compose(self.odom_pose, arc(v_m, w_m, dt))
+        self.velocity = np.array([v, omega])
+
+    def drive_command(self, front_clearance: float) -> tuple[float, float]:
+        """(v, omega) towards the next route point; stop when something is nearer than the safety distance."""
+        if len(self.route) == 0 or self.target >= len(self.route):
+            return 0.0, 0.0
+        goal = self.route[self.target]
+        if np.linalg.norm(goal - self.pose[:2]) < 0.5:
+            self.target += 1
+            if self.target >= len(self.route):
+                if not self.p["loop"]:
+                    return 0.0, 0.0
+                self.target = 0
+            goal = self.route[self.target]
+        d = goal - self.pose[:2]
+        err = float(wrap_angle(np.arctan2(d[1], d[0]) - self.pose[2]))
+        omega = 2.0 * err
+        v = self.p["max_speed"] * max(0.0, np.cos(err)) if abs(err) < np.pi / 3 else 0.0
+        if front_clearance < self.p["safety_distance"]:
+            v = 0.0
+        return v, omega
+
+
+def arc(v: float, omega: float, dt: float) -> np.ndarray:
+    """The pose increment of a differential drive moving at (v, omega) for dt."""
+    th = omega * dt
+    if abs(th) < 1e-9:
+        return np.array([v * dt, 0.0, th])
+    r = v / omega
+    return np.array([r * np.sin(th), r * (1 - np.cos(th)), th])

@@ -1,0 +1,135 @@
+"""``crowdsim run``: simulate a scenario, score the tracker, and write the run directory.
+
+Outputs are written into a fresh temporary directory beside the target and moved into place only when complete,
+so an interrupted or failed run leaves nothing half-written, and an existing non-empty directory is never touched.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from scenarios.geometry import wall_segments
+
+from .loop import Simulation
+
+CSV_HEADER = "frame,t,id,x,y,vx,vy"
+
+
+class RunDirError(ValueError):
+    pass
+
+
+def check_out_dir(out: Path) -> None:
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise RunDirError(f"--out {out}: already exists and is not empty; expected a new or empty directory "
+                          f"(nothing was written)")
+
+
+def _rows(frame_index: int, stamp: float, persons) -> np.ndarray:
+    n = len(persons)
+    return np.column_stack([np.full(n, frame_index), np.full(n, stamp), persons.track_id, persons.position,
+                            persons.velocity])
+
+
+def write_csv(path: Path, rows: list[np.ndarray]) -> None:
+    data = np.concatenate(rows) if rows else np.zeros((0, 7))
+    np.savetxt(path, data, fmt=["%d", "%.2f", "%d", "%.4f", "%.4f", "%.4f", "%.4f"], delimiter=",",
+               header=CSV_HEADER, comments="")
+
+
+def summary_table(metrics: dict) -> str:
+    tr, tm = metrics["tracking"], metrics["timing"]
+
+    def pct(v):
+        return "n/a" if v is None else f"{100 * v:.1f}%"
+
+    motp = "n/a" if tr["motp_m"] is None else f"{tr['motp_m']:.3f} m"
+    head = "| MOTA | MOTP | FP% | miss% | IDS | FP | FN | GT | tracker Hz | real-time factor |"
+    rule = "|" + "---|" * 10
+    row = (f"| {pct(tr['mota'])} | {motp} | {pct(tr['fp_rate'])} | {pct(tr['miss_rate'])} | {tr['id_switches']} "
+           f"| {tr['fp']} | {tr['fn']} | {tr['gt']} | {tm['tracker_hz']:.0f} | {tm['realtime_factor']:.2f}x |")
+    return "\n".join([head, rule, row])
+
+
+def run(scenario: dict, out: Path, rrd: bool = False, progress: bool = True) -> dict:
+    """Simulate, score and write ``out``; return metrics.json's content."""
+    out = Path(out)
+    check_out_dir(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        metrics = _simulate(scenario, tmp, rrd, progress)
+        if out.exists():
+            out.rmdir()  # checked empty above
+        tmp.rename(out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return metrics
+
+
+def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
+    from .plot import plot_run
+    from .recording import Recording
+
+    sim = Simulation(scenario)
+    start = time.perf_counter()
+    sim.warm_up()
+    warmup_s = time.perf_counter() - start
+    recording = Recording(tmp / "recording.rrd", wall_segments(scenario), sim.lasers) if rrd else None
+    gt_rows, track_rows, counts, robot_path, odom = [], [], [], [], []
+    duration = scenario["duration"]
+    bar = tqdm(total=round(duration, 2), unit="sim s", disable=not progress, desc=scenario["name"],
+               bar_format="{l_bar}{bar}| {n:.1f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
+    t0 = sim.crowd.t
+    for frame in sim.frames(duration):
+        gt_rows.append(_rows(frame.index, frame.stamp, frame.groundtruth))
+        track_rows.append(_rows(frame.index, frame.stamp, frame.tracks))
+        counts.append(len(frame.groundtruth))
+        robot_path.append(frame.robot_pose)
+        odom.append(frame.world_T_odom)
+        if recording:
+            recording.log(frame)
+        bar.update(round(frame.stamp - t0, 2) - bar.n)
+    bar.close()
+    if recording:
+        recording.close()
+    timing = sim.timing
+    tracking = sim.clearmot.summary()
+    metrics = {
+        "scenario": scenario["name"],
+        "seed": scenario["seed"],
+        "duration_s": duration,
+        "frames": tracking["frames"],
+        "tracking": tracking,
+        "groundtruth": {"mean_persons_in_range": float(np.mean(counts)) if counts else 0.0,
+                        "max_persons_in_range": int(max(counts)) if counts else 0},
+        "timing": {
+            "wall_s": timing.wall_s,
+            "realtime_factor": duration / timing.wall_s if timing.wall_s > 0 else float("inf"),
+            "tracker_hz": timing.tracker_cycles / timing.tracker_s if timing.tracker_s > 0 else float("inf"),
+            "crowd_s": timing.crowd_s,
+            "sensors_s": timing.sensors_s,
+            "warmup_wall_s": warmup_s,
+        },
+    }
+    write_csv(tmp / "groundtruth.csv", gt_rows)
+    write_csv(tmp / "tracks.csv", track_rows)
+    (tmp / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
+    table = summary_table(metrics)
+    (tmp / "summary.md").write_text(
+        f"# {scenario['name']} (seed {scenario['seed']}, {duration:g} s)\n\n{table}\n\n"
+        f"Persons within {scenario['evaluation']['max_range']:g} m of the robot: "
+        f"{metrics['groundtruth']['mean_persons_in_range']:.1f} on average, "
+        f"{metrics['groundtruth']['max_persons_in_range']} at most.\n\n![top-down view](topdown.png)\n")
+    plot_run(tmp / "topdown.png", wall_segments(scenario), np.concatenate(gt_rows) if gt_rows else np.zeros((0, 7)),
+             np.concatenate(track_rows) if track_rows else np.zeros((0, 7)), np.array(robot_path),
+             np.array(odom), f"{scenario['name']}, seed {scenario['seed']}")
+    return metrics

@@ -1,0 +1,34 @@
+"""2D rigid transforms as (x, y, yaw) poses: composition, inversion and batched point transforms."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def wrap_angle(a):
+    """Angles wrapped to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - np.asarray(a, float), 2 * np.pi)
+
+
+def compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The pose of frame b (given in frame a) expressed in a's parent frame: a * b."""
+    c, s = np.cos(a[2]), np.sin(a[2])
+    return np.array([a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], float(wrap_angle(a[2] + b[2]))])
+
+
+def inverse(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a[2]), np.sin(a[2])
+    return np.array([-c * a[0] - s * a[1], s * a[0] - c * a[1], -a[2]])
+
+
+def transform_points(pose: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Points [n, 2] given in the frame ``pose`` describes, expressed in that pose's parent frame."""
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    return points @ np.array([[c, s], [-s, c]]) + pose[:2]
+
+
+def rotate_covariances(yaw: float, cov: np.ndarray) -> np.ndarray:
+    """2x2 covariances [n, 2, 2] rotated by ``yaw``: R C R^T."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    rot = np.array([[c, -s], [s, c]])
+    return rot @ cov @ rot.T

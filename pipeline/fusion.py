@@ -1,0 +1,57 @@
+"""Detection-to-detection fusion (seed 000 Sec. II-A): detections of several sensors, brought into one frame, are
+merged greedily nearest first when closer than a distance, so a person seen by two lasers is one detection."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.distance import cdist
+
+from .frames import rotate_covariances, transform_points
+from .types import DetectedPersons
+
+
+def to_frame(dets: DetectedPersons, pose: np.ndarray, frame: str) -> DetectedPersons:
+    """Detections expressed in ``frame``, given the pose of their frame in it."""
+    pos = dets.position.copy()
+    pos[:, :2] = transform_points(pose, dets.position[:, :2])
+    cov = dets.covariance.copy()
+    cov[:, :2, :2] = rotate_covariances(pose[2], dets.covariance[:, :2, :2])
+    return DetectedPersons(dets.stamp, frame, dets.modality, dets.detection_id, pos, cov, dets.confidence)
+
+
+def fuse(batches: list[DetectedPersons], distance: float, first_id: int = 0) -> DetectedPersons:
+    """One batch from several in the same frame; pairs from different batches nearer than ``distance`` are averaged.
+
+    Fused detections get fresh ids from ``first_id`` on.
+    """
+    frames = {b.frame for b in batches}
+    if len(frames) != 1:
+        raise ValueError(f"fusion needs detections in one frame, got {sorted(frames)}")
+    pos = np.concatenate([b.position for b in batches])
+    cov = np.concatenate([b.covariance for b in batches])
+    conf = np.concatenate([b.confidence for b in batches])
+    origin = np.concatenate([np.full(len(b), k) for k, b in enumerate(batches)])
+    n = len(pos)
+    owner = np.arange(n)
+    if n > 1 and len(batches) > 1:
+        d = cdist(pos[:, :2], pos[:, :2])
+        d[origin[:, None] == origin[None, :]] = np.inf
+        i, j = np.nonzero(np.triu(d < distance, 1))
+        used = np.zeros(n, bool)
+        for k in np.argsort(d[i, j], kind="stable"):  # greedy, nearest pair first; only overlap pairs loop here
+            a, b = i[k], j[k]
+            if not used[a] and not used[b]:
+                used[a] = used[b] = True
+                owner[b] = a
+    _, inv = np.unique(owner, return_inverse=True)
+    m = inv.max() + 1 if n else 0
+    count = np.bincount(inv, minlength=m).astype(float)
+    fused_pos = np.stack([np.bincount(inv, pos[:, k], m) for k in range(3)], 1) / np.maximum(count, 1)[:, None]
+    fused_cov = np.zeros((m, 3, 3))
+    np.add.at(fused_cov, inv, cov)
+    fused_cov /= np.maximum(count, 1)[:, None, None] ** 2  # variance of the mean of independent estimates
+    fused_conf = np.zeros(m)
+    np.maximum.at(fused_conf, inv, conf)
+    ids = np.arange(first_id, first_id + m, dtype=np.int64)
+    modality = "+".join(sorted({b.modality for b in batches}))
+    return DetectedPersons(batches[0].stamp, batches[0].frame, modality, ids, fused_pos, fused_cov, fused_conf)

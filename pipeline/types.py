@@ -1,0 +1,121 @@
+"""The plain data types every part exchanges (the SPENCER messages' equivalents, seed 000 Sec. 3.1, 4.1, 6.1).
+
+Batches are structs of numpy arrays, one row per person, never lists of objects. Unknown covariance components get
+a large finite variance (``UNKNOWN_VARIANCE``), never inf, as the SPENCER messages do.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+UNKNOWN_VARIANCE = 1e6
+"""Variance (m^2) given to a covariance component the producer does not know (seed 000: large, never infinite)."""
+
+
+@dataclass
+class LaserScan:
+    """One sweep of a 2D laser, ranges in the sensor frame (x forward, angles counter-clockwise).
+
+    ``ranges`` holds NaN where the beam returned nothing within ``range_max``. ``person_id`` is the ground-truth id
+    of the person each beam hit (-1 for none); it is simulation-only and detectors must not read it.
+    """
+
+    stamp: float
+    frame: str
+    angle_min: float
+    angle_increment: float
+    range_max: float
+    ranges: np.ndarray
+    person_id: np.ndarray
+
+    @property
+    def angles(self) -> np.ndarray:
+        return self.angle_min + self.angle_increment * np.arange(self.ranges.size)
+
+    def points(self) -> np.ndarray:
+        """Beam endpoints [n, 2] in the sensor frame (NaN rows for no return)."""
+        a = self.angles
+        return np.stack([self.ranges * np.cos(a), self.ranges * np.sin(a)], axis=1)
+
+
+@dataclass
+class DetectedPersons:
+    """Detections of one detector (or one fusion stage) at one instant, in ``frame``."""
+
+    stamp: float
+    frame: str
+    modality: str
+    detection_id: np.ndarray  # [n] int64, unique per producer over a run
+    position: np.ndarray  # [n, 3]
+    covariance: np.ndarray  # [n, 3, 3]
+    confidence: np.ndarray  # [n]
+
+    def __len__(self) -> int:
+        return int(self.detection_id.size)
+
+    @classmethod
+    def empty(cls, stamp: float, frame: str, modality: str) -> "DetectedPersons":
+        return cls(stamp, frame, modality, np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0))
+
+
+@dataclass
+class TrackedPersons:
+    """People tracks (or ground truth, which uses the same shape) at one instant, in ``frame``.
+
+    Positions and velocities are 2D (x, y) because tracking happens on the ground plane (seed 000 Sec. II-B).
+    ``detection_id`` is the detection that updated the track this cycle (-1 when none). Ground truth fills
+    ``group_id`` (-1 for a person walking alone); trackers leave it None.
+    """
+
+    stamp: float
+    frame: str
+    track_id: np.ndarray  # [n] int64
+    is_matched: np.ndarray  # [n] bool
+    is_occluded: np.ndarray  # [n] bool
+    detection_id: np.ndarray  # [n] int64
+    position: np.ndarray  # [n, 2]
+    velocity: np.ndarray  # [n, 2]
+    position_covariance: np.ndarray  # [n, 2, 2]
+    velocity_covariance: np.ndarray  # [n, 2, 2]
+    age: np.ndarray  # [n] seconds since the track was started
+    group_id: np.ndarray | None = None  # [n] int64, ground truth only
+
+    def __len__(self) -> int:
+        return int(self.track_id.size)
+
+    @classmethod
+    def empty(cls, stamp: float, frame: str) -> "TrackedPersons":
+        z = np.zeros(0)
+        return cls(stamp, frame, np.zeros(0, np.int64), z.astype(bool), z.astype(bool), np.zeros(0, np.int64),
+                   np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros((0, 2, 2)), z)
+
+    def select(self, mask: np.ndarray) -> "TrackedPersons":
+        """The rows where ``mask`` holds (a boolean mask or an index array)."""
+        return TrackedPersons(
+            self.stamp, self.frame, self.track_id[mask], self.is_matched[mask], self.is_occluded[mask],
+            self.detection_id[mask], self.position[mask], self.velocity[mask], self.position_covariance[mask],
+            self.velocity_covariance[mask], self.age[mask], None if self.group_id is None else self.group_id[mask])
+
+
+@dataclass
+class SocialRelations:
+    """Weighted pairs of track ids (seed 000, coherent motion indicators)."""
+
+    stamp: float
+    track_a: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    track_b: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    strength: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+@dataclass
+class TrackedGroups:
+    """Groups as sets of track ids with a centroid; ``member_group[i]`` is the group of ``member_track[i]``."""
+
+    stamp: float
+    frame: str
+    group_id: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    centroid: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    member_group: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    member_track: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))

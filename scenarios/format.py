@@ -1,0 +1,137 @@
+"""The scenario format: every key, its unit, default and allowed range, in one schema.
+
+Defaults are the seeds' and the literature's values where they give one; each says where it comes from.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .schema import Field, ListOf, MapOf, Schema
+
+F = Field
+
+CROWD = Schema({
+    "radius": F("float", 0.25, min=0.05, max=1.0, doc="m, body radius for contacts (shoulder half-width)"),
+    "desired_speed_mean": F("float", 1.34, min=0.0, doc="m/s, Helbing & Molnar 1995 (N(1.34, 0.26))"),
+    "desired_speed_std": F("float", 0.26, min=0.0, doc="m/s, Helbing & Molnar 1995"),
+    "desired_speed_min": F("float", 0.6, min=0.0, doc="m/s, lower clip of the drawn desired speed"),
+    "desired_speed_max": F("float", 2.0, min=0.0, doc="m/s, upper clip of the drawn desired speed"),
+    "max_speed_factor": F("float", 1.3, min=1.0, doc="maximum speed = factor x desired speed (Helbing & Molnar 1995)"),
+    "relaxation_time": F("float", 0.5, min=0.0, exclusive_min=True, doc="s, tau of the desired force (HM 1995)"),
+    "agent_strength": F("float", 2.1, min=0.0, doc="m^2/s^2, V0 of the elliptical agent potential (HM 1995)"),
+    "agent_range": F("float", 0.3, min=0.0, exclusive_min=True, doc="m, sigma of the agent potential (HM 1995)"),
+    "step_time": F("float", 2.0, min=0.0, doc="s, Delta t of the elliptical potential's step width (HM 1995)"),
+    "wall_strength": F("float", 10.0, min=0.0, doc="m^2/s^2, U0 of the wall potential (HM 1995)"),
+    "wall_range": F("float", 0.2, min=0.0, exclusive_min=True, doc="m, R of the wall potential (HM 1995)"),
+    "fov_deg": F("float", 200.0, min=0.0, max=360.0, doc="deg, 2 phi of the anisotropic weighting (HM 1995)"),
+    "out_of_view_weight": F("float", 0.5, min=0.0, max=1.0, doc="c, weight of forces from behind (HM 1995)"),
+    "interaction_range": F("float", 5.0, min=0.0, exclusive_min=True, doc="m, neighbour search radius"),
+    "wall_interaction_range": F("float", 2.0, min=0.0, exclusive_min=True, doc="m, walls nearer than this repel"),
+    "group_attraction": F("float", 3.0, min=0.0, doc="m/s^2, coherence weight (Moussaid et al. 2010, beta_2)"),
+    "robot_strength": F("float", 10.0, min=0.0, doc="m^2/s^2, potential of the robot as an obstacle"),
+    "max_agents": F("int", 400, min=1, doc="most persons alive at once (sources wait beyond it)"),
+})
+
+WAYPOINT = Schema({
+    "position": F("point", required=True, doc="m, world frame"),
+    "radius": F("float", 1.0, min=0.0, exclusive_min=True, doc="m, reached when nearer than this"),
+})
+
+ROUTE = Schema({
+    "waypoints": F(ListOf(F("str"), min_items=1), required=True, doc="waypoint names, visited in order"),
+    "sink": F("bool", True, doc="persons leave the simulation at the last waypoint"),
+})
+
+SOURCE = Schema({
+    "position": F("point", required=True, doc="m, centre of the emission area"),
+    "size": F("point", [1.0, 1.0], doc="m, width and height of the emission area"),
+    "rate": F("float", required=True, min=0.0, doc="persons/s, mean emission rate (Poisson)"),
+    "start": F("float", 0.0, doc="s, first emission time on the simulation clock (which starts with the warm-up)"),
+    "stop": F("float", math.inf, doc="s, last emission time"),
+    "routes": F(MapOf(F("float", min=0.0)), required=True, doc="route name -> relative weight"),
+    "group_size_weights": F(ListOf(F("float", min=0.0), min_items=1), [1.0],
+                            doc="relative weights of group sizes 1, 2, 3, ..."),
+})
+
+STANDING = Schema({
+    "position": F("point", required=True, doc="m, centre of the standing group"),
+    "count": F("int", 1, min=1, max=12, doc="persons in the group (1 for a single standing person)"),
+    "spacing": F("float", 0.9, min=0.0, doc="m, distance between neighbours on the group's circle"),
+})
+
+ROBOT = Schema({
+    "start": F("pose", required=True, doc="m, m, rad: initial pose in the world frame"),
+    "route": F("points", None, doc="m, waypoints the robot drives through"),
+    "loop": F("bool", True, doc="drive the route again after the last waypoint"),
+    "radius": F("float", 0.425, min=0.0, exclusive_min=True, doc="m, footprint radius (SPENCER platform ~0.85 m wide)"),
+    "max_speed": F("float", 0.6, min=0.0, doc="m/s"),
+    "max_angular_speed": F("float", 1.0, min=0.0, doc="rad/s"),
+    "safety_distance": F("float", 0.6, min=0.0, doc="m, stop when a laser return is this close in front"),
+    "odometry_noise": F("float", 0.0, min=0.0, doc="relative std of the odometry's speed error (0: perfect)"),
+})
+
+LASER = Schema({
+    "name": F("str", required=True),
+    "mount": F("pose", required=True, doc="m, m, rad: pose in base_link"),
+    "height": F("float", 0.70, min=0.0, doc="m above the floor (seed 000: two lasers at 70 cm)"),
+    "fov_deg": F("float", 190.0, min=0.0, exclusive_min=True, max=360.0, doc="deg (SICK LMS500)"),
+    "resolution_deg": F("float", 0.5, min=0.0, exclusive_min=True, doc="deg between beams (SICK LMS500)"),
+    "range_max": F("float", 20.0, min=0.0, exclusive_min=True, doc="m (seed 000: detections up to 20 m)"),
+    "rate": F("float", 25.0, min=0.0, exclusive_min=True, doc="Hz (SICK LMS500: 25 or 50 Hz)"),
+    "noise_sigma": F("float", 0.012, min=0.0, doc="m, 1-sigma Gaussian range noise, of the order of the SICK LMS5xx statistical error (~1 cm)"),
+})
+
+DETECTOR = Schema({
+    "jump_distance": F("float", 0.4, min=0.0, exclusive_min=True, doc="m, seed 000 Sec. 4.2: 0.4 m"),
+    "min_points": F("int", 3, min=1, doc="seed 000 Sec. IV-C: far echoes of fewer than 3 points are unreliable"),
+    "min_width": F("float", 0.1, min=0.0, doc="m, narrowest segment taken for a person"),
+    "max_width": F("float", 0.9, min=0.0, doc="m, widest segment taken for a person"),
+    "min_bulge": F("float", 0.03, min=0.0, doc="m, least depth of the segment behind its chord (walls are flat)"),
+    "position_variance": F("float", 0.1, min=0.0, exclusive_min=True,
+                           doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)"),
+})
+
+TRACKER = Schema({
+    "process_noise": F("float", None, min=0.0, exclusive_min=True, doc="m^2/s^3, q_L of seed 000 Eq. 2"),
+    "gate_chi2": F("float", None, min=0.0, exclusive_min=True, doc="Mahalanobis gate on the innovation"),
+    "n_confirm": F("int", None, min=1, doc="matches that confirm a new track"),
+    "n_delete": F("int", None, min=1, doc="misses that delete a confirmed track (seed 000 Sec. V-C: 5)"),
+    "n_delete_tentative": F("int", None, min=1, doc="misses that delete an unconfirmed track"),
+    "initial_velocity_variance": F("float", None, min=0.0, exclusive_min=True, doc="m^2/s^2 of a new track"),
+})
+
+PIPELINE = Schema({
+    "detector": F(DETECTOR),
+    "fusion_distance": F("float", 0.4, min=0.0, doc="m, detections of two lasers nearer than this are one person"),
+    "tracker": F(TRACKER),
+})
+
+EVALUATION = Schema({
+    "threshold": F("float", 1.0, min=0.0, exclusive_min=True, doc="m, CLEAR-MOT match threshold (seed 000: 1 m)"),
+    "max_range": F("float", 20.0, min=0.0, exclusive_min=True, doc="m, ground truth is every person this near"),
+})
+
+MAP = Schema({
+    "walls": F(ListOf(F("points")), [], doc="polylines of wall segments, m"),
+    "obstacles": F(ListOf(F("points")), [], doc="closed polygons (columns, counters), m"),
+})
+
+SCENARIO = Schema({
+    "name": F("str", required=True),
+    "description": F("str", ""),
+    "seed": F("int", 0, min=0),
+    "duration": F("float", 60.0, min=0.0, exclusive_min=True, doc="s of simulated time that are recorded"),
+    "warmup": F("float", 0.0, min=0.0, doc="s of crowd-only simulation before the robot, sensors and scoring start, so flows are under way"),
+    "dt": F("float", 0.04, min=0.0, exclusive_min=True, max=0.1, doc="s, simulation step"),
+    "map": F(MAP),
+    "crowd": F(CROWD),
+    "waypoints": F(MapOf(F(WAYPOINT)), {}),
+    "routes": F(MapOf(F(ROUTE)), {}),
+    "sources": F(ListOf(F(SOURCE)), []),
+    "standing": F(ListOf(F(STANDING)), []),
+    "robot": F(ROBOT, required=True),
+    "sensors": F(Schema({"lasers": F(ListOf(F(LASER), min_items=1), required=True)}), required=True),
+    "pipeline": F(PIPELINE),
+    "evaluation": F(EVALUATION),
+})

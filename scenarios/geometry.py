@@ -1,0 +1,55 @@
+"""Map geometry on arrays: wall segments, point-to-segment vectors, point-in-polygon, line of sight."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def wall_segments(scenario: dict) -> np.ndarray:
+    """Every wall and obstacle edge as segments [m, 2, 2] (obstacle polygons are closed)."""
+    segs = []
+    for line in scenario["map"]["walls"]:
+        p = np.asarray(line, float)
+        segs.append(np.stack([p[:-1], p[1:]], axis=1))
+    for poly in scenario["map"]["obstacles"]:
+        p = np.asarray(poly, float)
+        segs.append(np.stack([p, np.roll(p, -1, axis=0)], axis=1))
+    return np.concatenate(segs) if segs else np.zeros((0, 2, 2))
+
+
+def closest_on_segments(points: np.ndarray, segs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vectors from the closest point of each segment to each point [n, m, 2], and their lengths [n, m]."""
+    a, ab = segs[:, 0], segs[:, 1] - segs[:, 0]
+    ap = points[:, None, :] - a[None]
+    t = np.clip(np.einsum("nmk,mk->nm", ap, ab) / np.maximum(np.einsum("mk,mk->m", ab, ab), 1e-12), 0.0, 1.0)
+    away = ap - t[..., None] * ab[None]
+    return away, np.linalg.norm(away, axis=-1)
+
+
+def inside_polygon(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """Even-odd rule point-in-polygon for points [n, 2]."""
+    x, y = points[:, 0:1], points[:, 1:2]
+    a, b = poly, np.roll(poly, -1, axis=0)
+    crosses = (a[:, 1] > y) != (b[:, 1] > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xi = a[:, 0] + (y - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+    return (crosses & (x < xi)).sum(axis=1) % 2 == 1
+
+
+def line_of_sight(origin: np.ndarray, points: np.ndarray, segs: np.ndarray) -> np.ndarray:
+    """For points [n, 2]: True where the straight line from ``origin`` crosses no segment."""
+    if len(segs) == 0 or len(points) == 0:
+        return np.ones(len(points), bool)
+    d = points - origin  # [n, 2]
+    a, e = segs[:, 0], segs[:, 1] - segs[:, 0]  # [m, 2]
+
+    def cross(u, v):
+        return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+    denom = cross(d[:, None, :], e[None])  # [n, m]
+    oa = a[None] - origin  # [1, m, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = cross(oa, e[None]) / denom  # along the sight line
+        u = cross(oa, d[:, None, :]) / denom  # along the segment
+    blocked = (np.abs(denom) > 1e-12) & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)
+    return ~blocked.any(axis=1)

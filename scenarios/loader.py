@@ -1,0 +1,101 @@
+"""Finding, reading and validating scenario files: schema checks first, then the checks that need geometry."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from .format import SCENARIO
+from .geometry import closest_on_segments, inside_polygon, wall_segments
+from .schema import ScenarioError, validate
+
+BUNDLED = Path(__file__).parent / "bundled"
+
+
+def bundled_scenarios() -> dict[str, str]:
+    """Bundled scenario name -> the first line of its description."""
+    out = {}
+    for path in sorted(BUNDLED.glob("*.yaml")):
+        with open(path) as f:
+            description = (yaml.safe_load(f) or {}).get("description", "")
+        out[path.stem] = description.strip().split("\n")[0]
+    return out
+
+
+def resolve(name_or_path: str) -> Path:
+    """A bundled name (``airport_disembarkation``) or a path to a YAML file."""
+    path = Path(name_or_path)
+    if path.suffix in (".yaml", ".yml") or path.exists():
+        if not path.is_file():
+            raise ScenarioError(str(path), "<file>", "no such scenario file")
+        return path
+    bundled = BUNDLED / f"{name_or_path}.yaml"
+    if bundled.is_file():
+        return bundled
+    names = ", ".join(bundled_scenarios())
+    raise ScenarioError(name_or_path, "<scenario>", f"not a bundled scenario nor a YAML file; bundled: {names}")
+
+
+def load_scenario(name_or_path: str, **overrides) -> dict:
+    """The validated scenario as plain data, defaults filled in; ``overrides`` replace top-level keys."""
+    path = resolve(name_or_path)
+    source = str(path)
+    try:
+        with open(path) as f:
+            raw = yaml.safe_load(f)
+    except yaml.YAMLError as e:
+        raise ScenarioError(source, "<file>", f"not valid YAML: {e}") from None
+    if not isinstance(raw, dict):
+        raise ScenarioError(source, "<top level>", "expected a mapping of keys")
+    raw.update({k: v for k, v in overrides.items() if v is not None})
+    return scenario_from_dict(raw, source)
+
+
+def scenario_from_dict(raw: dict, source: str = "<scenario>") -> dict:
+    """Validate scenario data given as a dict (as a YAML file would hold it); ``source`` names it in errors."""
+    scenario = validate(raw, SCENARIO, source)
+    check_geometry(scenario, source)
+    scenario["source"] = source
+    return scenario
+
+
+def check_geometry(scenario: dict, source: str) -> None:
+    """Cross-key checks: names that must exist, places that must be walkable, limits that must be ordered."""
+    crowd = scenario["crowd"]
+    if crowd["desired_speed_min"] > crowd["desired_speed_max"]:
+        raise ScenarioError(source, "crowd.desired_speed_min", "expected at most crowd.desired_speed_max")
+    for name, route in scenario["routes"].items():
+        for i, wp in enumerate(route["waypoints"]):
+            if wp not in scenario["waypoints"]:
+                raise ScenarioError(source, f"routes.{name}.waypoints[{i}]",
+                                    f"unknown waypoint {wp!r}; expected one of: {', '.join(scenario['waypoints'])}")
+    for i, src in enumerate(scenario["sources"]):
+        for r in src["routes"]:
+            if r not in scenario["routes"]:
+                raise ScenarioError(source, f"sources[{i}].routes.{r}",
+                                    f"unknown route; expected one of: {', '.join(scenario['routes'])}")
+        if sum(src["routes"].values()) <= 0:
+            raise ScenarioError(source, f"sources[{i}].routes", "expected at least one route with a positive weight")
+        if src["stop"] < src["start"]:
+            raise ScenarioError(source, f"sources[{i}].stop", "expected a time after sources[i].start")
+    segs = wall_segments(scenario)
+    radius = crowd["radius"]
+    places = [(f"waypoints.{n}.position", w["position"], "goal") for n, w in scenario["waypoints"].items()]
+    places += [(f"sources[{i}].position", s["position"], "source") for i, s in enumerate(scenario["sources"])]
+    places += [(f"standing[{i}].position", s["position"], "standing place") for i, s in enumerate(scenario["standing"])]
+    places += [("robot.start", scenario["robot"]["start"][:2], "robot start")]
+    places += [(f"robot.route[{i}]", p, "robot waypoint") for i, p in enumerate(scenario["robot"]["route"] or [])]
+    if not places or len(segs) == 0:
+        return
+    pts = np.array([p for _, p, _ in places], float)
+    dist = closest_on_segments(pts, segs)[1].min(axis=1)
+    inside = np.zeros(len(pts), bool)
+    for poly in scenario["map"]["obstacles"]:
+        inside |= inside_polygon(pts, np.asarray(poly, float))
+    for (key, p, what), d, ins in zip(places, dist, inside):
+        if ins or d < radius:
+            where = "inside an obstacle" if ins else f"{d:.2f} m from a wall"
+            raise ScenarioError(source, key, f"{what} {p} lies inside a wall ({where}); expected at least "
+                                             f"{radius} m (crowd.radius) of clearance from every wall")

@@ -1,0 +1,144 @@
+"""A small declarative schema for scenario files: every key with its type, unit, default and allowed range.
+
+Validation stops at the first fault and raises one ``ScenarioError`` naming the file, the key path and what was
+expected, so a user fixes one thing at a time and never gets a traceback from deep inside the simulator.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+
+class ScenarioError(ValueError):
+    """A scenario file (or argument) that does not satisfy the schema."""
+
+    def __init__(self, source: str, key: str, message: str):
+        super().__init__(f"{source}: {key}: {message}")
+        self.source, self.key = source, key
+
+
+@dataclass(frozen=True)
+class Field:
+    """One key: ``kind`` is 'float', 'int', 'str', 'bool', 'point' ([x, y]), 'pose' ([x, y, yaw]), 'points'
+    (a list of [x, y]), a nested ``Schema``, ``ListOf`` or ``MapOf``."""
+
+    kind: Any
+    default: Any = None
+    required: bool = False
+    min: float | None = None
+    max: float | None = None
+    exclusive_min: bool = False
+    choices: tuple | None = None
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Schema:
+    fields: dict[str, Field]
+
+
+@dataclass(frozen=True)
+class ListOf:
+    item: Any
+    min_items: int = 0
+
+
+@dataclass(frozen=True)
+class MapOf:
+    """A mapping from user-chosen names to items of one schema."""
+
+    item: Any
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _describe(v: Any) -> str:
+    return f"{type(v).__name__} {v!r}" if not isinstance(v, (dict, list)) else type(v).__name__
+
+
+def _check_point(v: Any, n: int, where: Callable[[str], ScenarioError], what: str):
+    if not isinstance(v, (list, tuple)) or len(v) != n or not all(_is_number(c) for c in v):
+        raise where(f"expected {what} (a list of {n} numbers), got {_describe(v)}")
+    return [float(c) for c in v]
+
+
+def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
+    """Return ``value`` checked against ``spec`` with defaults filled in; raise ScenarioError on the first fault."""
+
+    def err(message: str) -> ScenarioError:
+        return ScenarioError(source, key or "<top level>", message)
+
+    if isinstance(spec, Field):
+        kind = spec.kind
+        if isinstance(kind, (Schema, ListOf, MapOf)):
+            out = validate(value, kind, source, key)
+        elif kind == "float":
+            if not _is_number(value):
+                raise err(f"expected a number, got {_describe(value)}")
+            out = float(value)
+        elif kind == "int":
+            if not isinstance(value, int) or isinstance(value, bool):
+                raise err(f"expected an integer, got {_describe(value)}")
+            out = value
+        elif kind == "str":
+            if not isinstance(value, str):
+                raise err(f"expected a string, got {_describe(value)}")
+            out = value
+        elif kind == "bool":
+            if not isinstance(value, bool):
+                raise err(f"expected true or false, got {_describe(value)}")
+            out = value
+        elif kind == "point":
+            out = _check_point(value, 2, err, "a point [x, y] in metres")
+        elif kind == "pose":
+            out = _check_point(value, 3, err, "a pose [x, y, yaw] in metres and radians")
+        elif kind == "points":
+            if not isinstance(value, list) or len(value) < 2:
+                raise err(f"expected a list of two or more points [x, y], got {_describe(value)}")
+            out = [validate(p, Field("point"), source, f"{key}[{i}]") for i, p in enumerate(value)]
+        else:  # pragma: no cover - a schema bug, not a user fault
+            raise TypeError(f"unknown field kind {kind!r}")
+        if spec.choices is not None and out not in spec.choices:
+            raise err(f"expected one of {', '.join(map(str, spec.choices))}, got {out!r}")
+        if spec.min is not None and (out < spec.min or (spec.exclusive_min and out == spec.min)):
+            bound = f"greater than {spec.min}" if spec.exclusive_min else f"at least {spec.min}"
+            raise err(f"expected a value {bound}, got {out!r}")
+        if spec.max is not None and out > spec.max:
+            raise err(f"expected a value at most {spec.max}, got {out!r}")
+        return out
+    if isinstance(spec, Schema):
+        if value is None:
+            value = {}
+        if not isinstance(value, dict):
+            raise err(f"expected a mapping of keys, got {_describe(value)}")
+        unknown = [k for k in value if k not in spec.fields]
+        if unknown:
+            k = unknown[0]
+            raise ScenarioError(source, f"{key}.{k}" if key else str(k),
+                                f"unknown key; expected one of: {', '.join(spec.fields)}")
+        out = {}
+        for name, field in spec.fields.items():
+            sub = f"{key}.{name}" if key else name
+            if name in value:
+                out[name] = validate(value[name], field, source, sub)
+            elif field.required:
+                raise ScenarioError(source, sub, "missing required key")
+            elif isinstance(field.kind, Schema):
+                out[name] = validate({}, field.kind, source, sub)
+            else:
+                out[name] = field.default
+        return out
+    if isinstance(spec, ListOf):
+        if not isinstance(value, list):
+            raise err(f"expected a list, got {_describe(value)}")
+        if len(value) < spec.min_items:
+            raise err(f"expected at least {spec.min_items} item(s), got {len(value)}")
+        return [validate(v, spec.item, source, f"{key}[{i}]") for i, v in enumerate(value)]
+    if isinstance(spec, MapOf):
+        if not isinstance(value, dict):
+            raise err(f"expected a mapping of names to entries, got {_describe(value)}")
+        return {str(k): validate(v, spec.item, source, f"{key}.{k}") for k, v in value.items()}
+    raise TypeError(f"unknown spec {spec!r}")  # pragma: no cover

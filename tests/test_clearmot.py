@@ -1,0 +1,233 @@
+"""CLEAR-MOT (Bernardin & Stiefelhagen 2008) on hand-worked cases; expected values are worked out in comments."""
+
+import itertools
+import json
+
+import numpy as np
+import pytest
+
+from evaluation import ClearMot, FrameResult
+
+SUMMARY_KEYS = {"mota", "motp_m", "fp", "fn", "id_switches", "gt", "matches", "fp_rate", "miss_rate", "frames"}
+
+
+def frame(ids, pos):
+    """(ids [n] int64, pos [n, 2]) from Python lists; empty lists give shapes (0,) and (0, 2)."""
+    return np.asarray(ids, np.int64).reshape(-1), np.asarray(pos, float).reshape(-1, 2)
+
+
+def step(cm, gt, hyp):
+    return cm.update(*frame(*gt), *frame(*hyp))
+
+
+def test_perfect_tracking_two_people_three_frames():
+    cm = ClearMot()
+    for t in range(3):
+        a, b = (0.5 * t, 0.0), (5.0, 0.2 * t)
+        r = step(cm, ([1, 2], [a, b]), ([10, 20], [(a[0] + 0.1, a[1]), (b[0], b[1] + 0.3)]))
+        assert (r.gt, r.matches, r.fp, r.fn, r.id_switches) == (2, 2, 0, 0, 0)
+        np.testing.assert_array_equal(r.matched_gt_ids, [1, 2])
+        np.testing.assert_array_equal(r.matched_hyp_ids, [10, 20])
+        np.testing.assert_allclose(r.distances, [0.1, 0.3], atol=1e-12)
+    s = cm.summary()
+    # 6 matches, distances 3 * (0.1 + 0.3) = 1.2 -> MOTP 1.2 / 6 = 0.2; no errors -> MOTA 1.
+    assert s["mota"] == 1.0
+    assert s["motp_m"] == pytest.approx(0.2, abs=1e-12)
+    assert (s["gt"], s["matches"], s["fp"], s["fn"], s["id_switches"], s["frames"]) == (6, 6, 0, 0, 0, 3)
+    assert s["fp_rate"] == 0.0 and s["miss_rate"] == 0.0
+
+
+def test_false_positive():
+    cm = ClearMot()
+    step(cm, ([1], [(0, 0)]), ([7], [(0, 0)]))
+    r = step(cm, ([1], [(0, 0)]), ([7, 8], [(0, 0), (50, 0)]))
+    assert (r.fp, r.fn, r.matches) == (1, 0, 1)
+    s = cm.summary()
+    # gt 2, fp 1 -> MOTA = 1 - 1/2 = 0.5, fp_rate 0.5.
+    assert s["fp"] == 1 and s["gt"] == 2
+    assert s["mota"] == 0.5 and s["fp_rate"] == 0.5 and s["miss_rate"] == 0.0
+
+
+def test_miss():
+    cm = ClearMot()
+    step(cm, ([1], [(0, 0)]), ([7], [(0.2, 0)]))
+    r = step(cm, ([1], [(0, 0)]), ([], []))
+    assert (r.fn, r.fp, r.matches) == (1, 0, 0)
+    step(cm, ([1], [(0, 0)]), ([7], [(0.2, 0)]))  # same hyp again: no switch
+    s = cm.summary()
+    # gt 3, fn 1 -> MOTA = 1 - 1/3 = 2/3; MOTP = (0.2 + 0.2) / 2.
+    assert (s["fn"], s["id_switches"], s["gt"]) == (1, 0, 3)
+    assert s["mota"] == pytest.approx(2 / 3, abs=1e-15)
+    assert s["miss_rate"] == pytest.approx(1 / 3, abs=1e-15)
+    assert s["motp_m"] == pytest.approx(0.2, abs=1e-15)
+
+
+def test_id_switch():
+    cm = ClearMot()
+    assert step(cm, ([1], [(0, 0)]), ([1], [(0, 0)])).id_switches == 0
+    assert step(cm, ([1], [(1, 0)]), ([1], [(1, 0)])).id_switches == 0
+    r = step(cm, ([1], [(2, 0)]), ([2], [(2, 0)]))
+    assert r.id_switches == 1 and r.matched_hyp_ids.tolist() == [2]
+    s = cm.summary()
+    # gt 3, ids 1 -> MOTA = 1 - 1/3 = 2/3.
+    assert (s["id_switches"], s["fp"], s["fn"], s["gt"]) == (1, 0, 0, 3)
+    assert s["mota"] == pytest.approx(2 / 3, abs=1e-15)
+
+
+def test_two_tracks_swap_identities():
+    cm = ClearMot()
+    step(cm, ([1, 2], [(0, 0), (3, 0)]), ([10, 20], [(0, 0), (3, 0)]))
+    # Hyps swap: each gt's old hyp is 3 m away (over the threshold), so both get the other hyp -> 2 switches.
+    r = step(cm, ([1, 2], [(0, 0), (3, 0)]), ([10, 20], [(3, 0), (0, 0)]))
+    assert r.id_switches == 2
+    np.testing.assert_array_equal(r.matched_hyp_ids, [20, 10])
+    # gt 4, ids 2 -> MOTA 0.5.
+    assert cm.summary()["mota"] == 0.5
+
+
+def test_correspondence_kept_although_nearer_track_appears():
+    cm = ClearMot()
+    step(cm, ([1], [(0, 0)]), ([1], [(0.5, 0)]))
+    r = step(cm, ([1], [(0, 0)]), ([1, 2], [(0.6, 0), (0.05, 0)]))
+    assert r.matched_hyp_ids.tolist() == [1]
+    assert (r.id_switches, r.fp, r.fn) == (0, 1, 0)
+    s = cm.summary()
+    # gt 2, fp 1 -> MOTA 0.5; MOTP (0.5 + 0.6) / 2 = 0.55.
+    assert s["mota"] == 0.5
+    assert s["motp_m"] == pytest.approx(0.55, abs=1e-15)
+    # Control: without the history, the nearer hyp 2 wins.
+    assert step(ClearMot(), ([1], [(0, 0)]), ([1, 2], [(0.6, 0), (0.05, 0)])).matched_hyp_ids.tolist() == [2]
+
+
+def test_hungarian_beats_greedy_on_total_distance():
+    cm = ClearMot(threshold=5.0)
+    # 1D: gt 1 at 0, gt 2 at 2; hyp 10 at 0.9, hyp 20 at -1.
+    # Distances: 1-10 0.9, 2-10 1.1, 1-20 1.0, 2-20 3.0.
+    # Greedy nearest first takes (1,10)=0.9, leaving (2,20)=3.0: total 3.9.
+    # Optimal: (1,20)=1.0 + (2,10)=1.1 = 2.1.
+    r = step(cm, ([1, 2], [(0, 0), (2, 0)]), ([10, 20], [(0.9, 0), (-1, 0)]))
+    np.testing.assert_array_equal(r.matched_gt_ids, [1, 2])
+    np.testing.assert_array_equal(r.matched_hyp_ids, [20, 10])
+    np.testing.assert_allclose(r.distances, [1.0, 1.1], atol=1e-12)
+    assert cm.summary()["motp_m"] == pytest.approx(1.05, abs=1e-12)
+
+
+def test_hungarian_maximises_matches_within_threshold():
+    cm = ClearMot()  # 1 m
+    # gt 1 at 0, gt 2 at 0.85; hyp 10 at 0.4, hyp 20 at -0.5.
+    # Distances: 1-10 0.4, 2-10 0.45, 1-20 0.5, 2-20 1.35 (> 1 m, forbidden).
+    # Greedy takes (1,10)=0.4 and leaves gt 2 / hyp 20 unmatched; optimal matches both: (1,20) + (2,10).
+    r = step(cm, ([1, 2], [(0, 0), (0.85, 0)]), ([10, 20], [(0.4, 0), (-0.5, 0)]))
+    assert (r.matches, r.fp, r.fn) == (2, 0, 0)
+    np.testing.assert_array_equal(r.matched_hyp_ids, [20, 10])
+
+
+def test_over_threshold_is_not_a_match_and_threshold_is_inclusive():
+    cm = ClearMot(threshold=1.0)
+    r = step(cm, ([1], [(0, 0)]), ([1], [(1.2, 0)]))
+    assert (r.matches, r.fp, r.fn) == (0, 1, 1)
+    s = cm.summary()
+    # gt 1, fp 1, fn 1 -> MOTA = 1 - 2/1 = -1; no matches -> MOTP None.
+    assert s["mota"] == -1.0 and s["motp_m"] is None
+    # Exactly at the threshold is a match (inclusive), for a new pair ...
+    r = step(ClearMot(1.0), ([1], [(0, 0)]), ([1], [(1.0, 0)]))
+    assert r.matches == 1 and r.distances.tolist() == [1.0]
+    # ... and for a kept one; a kept one over the threshold is dropped.
+    cm = ClearMot(1.0)
+    step(cm, ([1], [(0, 0)]), ([1], [(0.5, 0)]))
+    assert step(cm, ([1], [(0, 0)]), ([1], [(1.0, 0)])).matches == 1
+    assert step(cm, ([1], [(0, 0)]), ([1], [(1.0001, 0)])).matches == 0
+
+
+def test_id_switch_after_gap():
+    cm = ClearMot()
+    step(cm, ([1], [(0, 0)]), ([1], [(0, 0)]))
+    assert step(cm, ([1], [(0, 0)]), ([], [])).fn == 1
+    r = step(cm, ([1], [(0, 0)]), ([3], [(0.1, 0)]))
+    assert r.id_switches == 1  # last known correspondence (hyp 1) persists over the gap
+    s = cm.summary()
+    # gt 3, fn 1, ids 1 -> MOTA = 1 - 2/3 = 1/3.
+    assert (s["fn"], s["id_switches"]) == (1, 1)
+    assert s["mota"] == pytest.approx(1 / 3, abs=1e-15)
+
+
+def test_step1_keeps_only_previous_frame_correspondences():
+    # Documented choice: step 1 keeps the matches of frame t-1 only. After a gap the old hyp is not preferred,
+    # so the nearer hyp 2 is matched by the Hungarian step, which is a switch against the last known hyp 1.
+    cm = ClearMot()
+    step(cm, ([1], [(0, 0)]), ([1], [(0.5, 0)]))
+    step(cm, ([1], [(0, 0)]), ([1], [(1.5, 0)]))  # over threshold: fn + fp
+    r = step(cm, ([1], [(0, 0)]), ([1, 2], [(0.6, 0), (0.05, 0)]))
+    assert r.matched_hyp_ids.tolist() == [2] and r.id_switches == 1
+
+
+def test_empty_frames():
+    cm = ClearMot()
+    r = step(cm, ([], []), ([], []))
+    assert isinstance(r, FrameResult)
+    assert (r.gt, r.matches, r.fp, r.fn, r.id_switches) == (0, 0, 0, 0, 0)
+    assert r.matched_gt_ids.shape == (0,) and r.distances.shape == (0,)
+    s = cm.summary()
+    assert s["mota"] is None and s["motp_m"] is None and s["fp_rate"] is None and s["miss_rate"] is None
+    assert s["frames"] == 1 and s["gt"] == 0
+    r = step(cm, ([1, 2], [(0, 0), (1, 1)]), ([], []))  # gt only
+    assert (r.gt, r.fn, r.fp) == (2, 2, 0)
+    r = step(cm, ([], []), ([4, 5, 6], [(0, 0), (1, 1), (2, 2)]))  # hyps only
+    assert (r.gt, r.fn, r.fp) == (0, 0, 3)
+    s = cm.summary()
+    # gt 2, fn 2, fp 3 -> MOTA = 1 - 5/2 = -1.5.
+    assert (s["gt"], s["fn"], s["fp"], s["matches"], s["frames"]) == (2, 2, 3, 0, 3)
+    assert s["mota"] == -1.5 and s["fp_rate"] == 1.5 and s["miss_rate"] == 1.0
+
+
+def test_summary_is_plain_json():
+    cm = ClearMot()
+    step(cm, ([1, 2], [(0, 0), (3, 0)]), ([1], [(0.25, 0)]))
+    s = cm.summary()
+    assert set(s) == SUMMARY_KEYS
+    assert json.loads(json.dumps(s)) == s
+    for k in ("fp", "fn", "id_switches", "gt", "matches", "frames"):
+        assert type(s[k]) is int
+    for k in ("mota", "motp_m", "fp_rate", "miss_rate"):
+        assert type(s[k]) is float
+    assert s["mota"] == 0.5 and s["motp_m"] == 0.25
+
+
+def test_non_finite_positions_never_match_and_bad_input_is_rejected():
+    r = step(ClearMot(), ([1, 2], [(np.nan, 0), (0, 0)]), ([1, 2], [(0, 0), (np.inf, 0)]))
+    assert (r.matches, r.fp, r.fn) == (1, 1, 1)
+    assert (r.matched_gt_ids.tolist(), r.matched_hyp_ids.tolist()) == ([2], [1])
+    with pytest.raises(ValueError):
+        step(ClearMot(), ([1, 1], [(0, 0), (1, 0)]), ([], []))
+    with pytest.raises(ValueError):
+        ClearMot().update(np.array([1, 2]), np.zeros((3, 2)), np.zeros(0, int), np.zeros((0, 2)))
+    with pytest.raises(ValueError):
+        ClearMot(threshold=-1.0)
+
+
+def _brute_force(gt_pos, hyp_pos, thr):
+    """(most matches within thr, least total distance among those) by enumerating all assignments."""
+    n, m = len(gt_pos), len(hyp_pos)
+    d = np.linalg.norm(gt_pos[:, None] - hyp_pos[None], axis=2)
+    best = (0, 0.0)
+    for k in range(1, min(n, m) + 1):
+        for rows in itertools.combinations(range(n), k):
+            for cols in itertools.permutations(range(m), k):
+                dd = d[list(rows), list(cols)]
+                if np.all(dd <= thr):
+                    cand = (k, float(dd.sum()))
+                    if cand[0] > best[0] or (cand[0] == best[0] and cand[1] < best[1]):
+                        best = cand
+    return best
+
+
+def test_single_frame_matching_equals_brute_force():
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        n, m = rng.integers(0, 5, size=2)
+        g = rng.uniform(0, 2.0, (n, 2))
+        h = rng.uniform(0, 2.0, (m, 2))
+        r = ClearMot(1.0).update(np.arange(n), g, np.arange(m) + 100, h)
+        k, total = _brute_force(g, h, 1.0)
+        assert r.matches == k
+        assert float(r.distances.sum()) == pytest.approx(total, abs=1e-9)

@@ -1,0 +1,141 @@
+"""The social-force crowd against analytic expectations: free walking, passing, walls, sources, sinks, groups."""
+
+import numpy as np
+import pytest
+
+from crowdsim.crowd import Crowd
+from scenarios.geometry import closest_on_segments
+
+DT = 0.04
+
+
+def one_route(*points, radius=0.3, sink=True):
+    wps = {f"w{k}": {"position": list(p), "radius": radius} for k, p in enumerate(points)}
+    return {"waypoints": wps, "routes": {"r": {"waypoints": list(wps), "sink": sink}}}
+
+
+def test_lone_agent_reaches_goal_at_desired_speed(make_scenario):
+    # From rest, tau dv/dt = v0 - v gives x(t) = v0 (t - tau (1 - exp(-t/tau))): 20 m at v0 = 1.2 m/s take
+    # 20/1.2 + tau = 17.17 s once the exponential has died out. No wall is within the 2 m wall range.
+    sc = make_scenario(**one_route((25, 20), radius=0.05, sink=False))
+    crowd = Crowd(sc, np.random.default_rng(0))
+    crowd.add_walkers(np.array([[5.0, 20.0]]), "r", desired_speed=1.2)
+    speeds, arrival = [], None
+    for k in range(int(25 / DT)):
+        crowd.step(DT)
+        speeds.append(np.linalg.norm(crowd.vel[0]))
+        if arrival is None and crowd.pos[0, 0] >= 25.0 - 1e-9:
+            arrival = (k + 1) * DT
+    assert arrival == pytest.approx(20 / 1.2 + 0.5, abs=0.1)
+    assert np.mean(speeds[int(5 / DT):int(15 / DT)]) == pytest.approx(1.2, rel=1e-3)
+    assert abs(crowd.pos[0, 1] - 20.0) < 1e-9  # a straight line: nothing pushed it sideways
+
+
+def test_speed_never_exceeds_max_factor(make_scenario):
+    sc = make_scenario(**one_route((35, 20), sink=False))
+    crowd = Crowd(sc, np.random.default_rng(0))
+    crowd.add_walkers(np.array([[5.0, 20.0], [5.0, 20.6], [5.6, 20.0]]), "r", desired_speed=1.0)
+    for _ in range(200):
+        crowd.step(DT)
+        assert np.linalg.norm(crowd.vel, axis=1).max() <= 1.3 * 1.0 + 1e-9 + 0.6 / DT  # contacts may add a push
+    assert np.linalg.norm(crowd.vel, axis=1).max() <= 1.3 + 1e-9
+
+
+def test_two_agents_head_on_pass_without_overlapping(make_scenario):
+    data = {"waypoints": {"east": {"position": [30, 20], "radius": 0.5}, "west": {"position": [10, 20], "radius": 0.5}},
+            "routes": {"to_east": {"waypoints": ["east"]}, "to_west": {"waypoints": ["west"]}}}
+    sc = make_scenario(**data)
+    crowd = Crowd(sc, np.random.default_rng(0))
+    a = crowd.add_walkers(np.array([[10.0, 20.05]]), "to_east", desired_speed=1.3)[0]
+    b = crowd.add_walkers(np.array([[30.0, 19.95]]), "to_west", desired_speed=1.3)[0]
+    closest, lateral = np.inf, 0.0
+    for _ in range(int(30 / DT)):
+        crowd.step(DT)
+        if len(crowd.pos) == 2:
+            closest = min(closest, np.linalg.norm(crowd.pos[0] - crowd.pos[1]))
+            lateral = max(lateral, np.abs(crowd.pos[:, 1] - 20).max())
+    assert closest >= 2 * 0.25 - 1e-9  # the bodies (radius 0.25 m) never overlapped
+    assert lateral > 0.2  # they stepped aside for each other
+    assert len(crowd.pos) == 0  # both reached their goals and left
+    assert a != b
+
+
+def test_agent_pushed_at_a_wall_never_crosses_it(make_scenario):
+    # a wall across the room at y = 20; the goal lies behind it, so everyone presses into it, and pushes each other
+    walls = [[[0, 0], [40, 0], [40, 40], [0, 40], [0, 0]], [[0, 20], [40, 20]]]
+    sc = make_scenario(walls=walls, **one_route((20, 30), sink=False))
+    crowd = Crowd(sc, np.random.default_rng(1))
+    start = np.stack([np.linspace(17, 23, 15), np.full(15, 15.0)], 1)
+    crowd.add_walkers(np.concatenate([start, start + [0, -1.0]]), "r", desired_speed=1.8)
+    for _ in range(int(20 / DT)):
+        crowd.step(DT)
+        assert crowd.pos[:, 1].max() <= 20 - 0.25 + 1e-9
+        _, d = closest_on_segments(crowd.pos, crowd.walls)
+        assert d.min() >= 0.25 - 1e-9
+
+
+def test_corner_keeps_agents_out_of_both_walls(make_scenario):
+    sc = make_scenario(**one_route((39.9 - 0.3, 39.9 - 0.3), radius=0.01, sink=False))
+    crowd = Crowd(sc, np.random.default_rng(2))
+    crowd.add_walkers(np.random.default_rng(3).uniform(25, 35, (20, 2)), "r", desired_speed=1.5)
+    for _ in range(int(20 / DT)):
+        crowd.step(DT)
+    _, d = closest_on_segments(crowd.pos, crowd.walls)
+    assert d.min() >= 0.25 - 1e-9
+    assert crowd.pos.max() <= 40 - 0.25 + 1e-9
+
+
+def test_source_rate_and_sink(make_scenario):
+    # 1 person/s for 100 s (singles): a Poisson count with mean 100, sd 10; all leave at the sink 10 m away
+    sc = make_scenario(sources=[{"position": [5, 20], "size": [1, 3], "rate": 1.0, "stop": 100.0, "routes": {"r": 1}}],
+                       **one_route((15, 20), radius=0.8))
+    crowd = Crowd(sc, np.random.default_rng(4))
+    seen = set()
+    for _ in range(int(130 / DT)):
+        crowd.step(DT)
+        seen.update(crowd.id.tolist())
+    assert 70 <= len(seen) <= 130
+    assert len(crowd.pos) == 0  # everyone reached the sink and left
+
+
+def test_groups_are_emitted_together_and_stay_together(make_scenario):
+    sc = make_scenario(sources=[{"position": [5, 20], "size": [2, 4], "rate": 0.5, "stop": 40.0, "routes": {"r": 1},
+                                 "group_size_weights": [0, 0, 1]}], **one_route((35, 20), sink=False))
+    crowd = Crowd(sc, np.random.default_rng(5))
+    spread = []
+    for _ in range(int(50 / DT)):
+        crowd.step(DT)
+        for g in np.unique(crowd.group):
+            members = crowd.pos[crowd.group == g]
+            spread.append(np.linalg.norm(members - members.mean(0), axis=1).max())
+    sizes = np.unique(crowd.group, return_counts=True)[1]
+    assert (sizes == 3).all() and len(sizes) >= 3
+    assert np.max(spread) < 2.0
+
+
+def test_standing_group_stays_in_place(make_scenario):
+    sc = make_scenario(standing=[{"position": [20, 20], "count": 4, "spacing": 0.9}])
+    crowd = Crowd(sc, np.random.default_rng(6))
+    start = crowd.pos.copy()
+    for _ in range(200):
+        crowd.step(DT)
+    # they settle where the anchor's pull balances the members' mutual repulsion, a few centimetres out
+    assert np.abs(crowd.pos - start).max() < 0.1
+    assert np.abs(crowd.vel).max() < 0.01
+    # four on a circle with 0.9 m between neighbours: radius 0.9 / (2 sin(pi/4))
+    assert np.linalg.norm(start - [20, 20], axis=1) == pytest.approx(np.full(4, 0.9 / np.sqrt(2)))
+    assert len(np.unique(crowd.group)) == 1 and crowd.group[0] >= 0
+
+
+def test_same_seed_same_crowd(make_scenario):
+    sc = make_scenario(sources=[{"position": [5, 20], "size": [2, 4], "rate": 2.0, "routes": {"r": 1},
+                                 "group_size_weights": [0.6, 0.3, 0.1]}], **one_route((35, 20)))
+    runs = []
+    for _ in range(2):
+        crowd = Crowd(sc, np.random.default_rng(7))
+        for _ in range(300):
+            crowd.step(DT)
+        runs.append(crowd.states())
+    assert np.array_equal(runs[0].id, runs[1].id)
+    assert np.array_equal(runs[0].position, runs[1].position)
+    assert np.array_equal(runs[0].group_id, runs[1].group_id)
