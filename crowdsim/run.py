@@ -7,6 +7,7 @@ so an interrupted or failed run leaves nothing half-written, and an existing non
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import tempfile
 import time
@@ -64,6 +65,9 @@ def run(scenario: dict, out: Path, rrd: bool = False, progress: bool = True) -> 
     check_out_dir(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    umask = os.umask(0)
+    os.umask(umask)
+    tmp.chmod(0o777 & ~umask)  # mkdtemp makes it private; the finished run directory is an ordinary one
     try:
         metrics = _simulate(scenario, tmp, rrd, progress)
         if out.exists():
