@@ -63,18 +63,26 @@ def run(scenario: dict, out: Path, rrd: bool = False, progress: bool = True) -> 
     """Simulate, score and write ``out``; return metrics.json's content."""
     out = Path(out)
     check_out_dir(out)
+    made = [p for p in reversed(out.absolute().parents) if not p.exists()]  # parents this run creates
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
-    umask = os.umask(0)
-    os.umask(umask)
-    tmp.chmod(0o777 & ~umask)  # mkdtemp makes it private; the finished run directory is an ordinary one
+    tmp = None
     try:
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+        umask = os.umask(0)
+        os.umask(umask)
+        tmp.chmod(0o777 & ~umask)  # mkdtemp makes it private; the finished run directory is an ordinary one
         metrics = _simulate(scenario, tmp, rrd, progress)
         if out.exists():
             out.rmdir()  # checked empty above
         tmp.rename(out)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+        for parent in reversed(made):
+            try:
+                parent.rmdir()
+            except OSError:
+                break
         raise
     return metrics
 

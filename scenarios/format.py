@@ -48,7 +48,7 @@ SOURCE = Schema({
     "size": F("point", [1.0, 1.0], doc="m, width and height of the emission area"),
     "rate": F("float", required=True, min=0.0, doc="persons/s, mean emission rate (Poisson)"),
     "start": F("float", 0.0, doc="s, first emission time on the simulation clock (which starts with the warm-up)"),
-    "stop": F("float", math.inf, doc="s, last emission time"),
+    "stop": F("float", math.inf, allow_inf=True, doc="s, last emission time"),
     "routes": F(MapOf(F("float", min=0.0)), required=True, doc="route name -> relative weight"),
     "group_size_weights": F(ListOf(F("float", min=0.0), min_items=1), [1.0],
                             doc="relative weights of group sizes 1, 2, 3, ..."),

@@ -43,10 +43,15 @@ def load_scenario(name_or_path: str, **overrides) -> dict:
     path = resolve(name_or_path)
     source = str(path)
     try:
-        with open(path) as f:
+        with open(path, encoding="utf-8") as f:
             raw = yaml.safe_load(f)
     except yaml.YAMLError as e:
-        raise ScenarioError(source, "<file>", f"not valid YAML: {e}") from None
+        mark = getattr(e, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(e, "problem", None) or str(e).splitlines()[0]
+        raise ScenarioError(source, "<file>", f"not valid YAML{where}: {problem}") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise ScenarioError(source, "<file>", f"cannot be read as UTF-8 text: {e}") from None
     if not isinstance(raw, dict):
         raise ScenarioError(source, "<top level>", "expected a mapping of keys")
     raw.update({k: v for k, v in overrides.items() if v is not None})
@@ -79,7 +84,7 @@ def check_geometry(scenario: dict, source: str) -> None:
         if sum(src["routes"].values()) <= 0:
             raise ScenarioError(source, f"sources[{i}].routes", "expected at least one route with a positive weight")
         if src["stop"] < src["start"]:
-            raise ScenarioError(source, f"sources[{i}].stop", "expected a time after sources[i].start")
+            raise ScenarioError(source, f"sources[{i}].stop", f"expected a time after sources[{i}].start")
     segs = wall_segments(scenario)
     radius = crowd["radius"]
     places = [(f"waypoints.{n}.position", w["position"], "goal") for n, w in scenario["waypoints"].items()]

@@ -6,6 +6,7 @@ expected, so a user fixes one thing at a time and never gets a traceback from de
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -30,6 +31,7 @@ class Field:
     max: float | None = None
     exclusive_min: bool = False
     choices: tuple | None = None
+    allow_inf: bool = False
     doc: str = ""
 
 
@@ -56,11 +58,12 @@ def _is_number(v: Any) -> bool:
 
 
 def _describe(v: Any) -> str:
-    return f"{type(v).__name__} {v!r}" if not isinstance(v, (dict, list)) else type(v).__name__
+    text = repr(v)
+    return f"{type(v).__name__} {text}" if len(text) <= 60 else type(v).__name__
 
 
 def _check_point(v: Any, n: int, where: Callable[[str], ScenarioError], what: str):
-    if not isinstance(v, (list, tuple)) or len(v) != n or not all(_is_number(c) for c in v):
+    if not isinstance(v, (list, tuple)) or len(v) != n or not all(_is_number(c) and math.isfinite(c) for c in v):
         raise where(f"expected {what} (a list of {n} numbers), got {_describe(v)}")
     return [float(c) for c in v]
 
@@ -79,6 +82,8 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
             if not _is_number(value):
                 raise err(f"expected a number, got {_describe(value)}")
             out = float(value)
+            if math.isnan(out) or (math.isinf(out) and not spec.allow_inf):
+                raise err(f"expected a finite number, got {out!r}")
         elif kind == "int":
             if not isinstance(value, int) or isinstance(value, bool):
                 raise err(f"expected an integer, got {_describe(value)}")

@@ -1,0 +1,230 @@
+"""The ``crowdsim`` command: one clear error line and exit code 2 on bad input, nothing half-written, nothing of
+the user's overwritten, and a complete run directory on success."""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from crowdsim.cli import main
+from crowdsim.run import CSV_HEADER, RunDirError, run
+from scenarios import bundled_scenarios, load_scenario
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+# A 12 m x 10 m room, one source walking people across it, a standing pair (so every frame has ground truth), a
+# parked robot with two lasers; 2 s of warm-up and 2 s recorded.
+TINY = """\
+name: tiny_room
+description: a short smoke-test run
+seed: 3
+warmup: 2
+duration: 2
+map:
+  walls:
+    - [[0, 0], [12, 0], [12, 10], [0, 10], [0, 0]]
+waypoints:
+  a: {position: [2, 5]}
+  b: {position: [10, 5]}
+routes:
+  r: {waypoints: [a, b]}
+sources:
+  - {position: [2, 5], rate: 2.0, routes: {r: 1.0}}
+standing:
+  - {position: [6, 7.5], count: 2}
+robot:
+  start: [6, 2, 1.5707963]
+sensors:
+  lasers:
+    - {name: front_laser, mount: [0.25, 0, 0]}
+    - {name: rear_laser, mount: [-0.25, 0, 3.141592653589793]}
+"""
+
+
+def crowdsim_command() -> list[str]:
+    beside = Path(sys.executable).parent / "crowdsim"
+    if beside.is_file():
+        return [str(beside)]
+    found = shutil.which("crowdsim")
+    return [found] if found else [sys.executable, "-m", "crowdsim.cli"]
+
+
+def listing(path: Path) -> set[str]:
+    return {p.name for p in path.iterdir()}
+
+
+def one_error_line(err: str) -> str:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("crowdsim: error: "), err
+    return lines[0]
+
+
+def test_scenarios_lists_bundled_with_description():
+    result = subprocess.run(crowdsim_command() + ["scenarios"], capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    lines = {line.split()[0]: line for line in result.stdout.splitlines() if line.strip()}
+    description = bundled_scenarios()["airport_disembarkation"]
+    assert description.startswith("Passengers leave an aircraft door")
+    assert "airport_disembarkation" in lines
+    assert lines["airport_disembarkation"].split(None, 1)[1] == description
+
+
+def test_run_bad_yaml_exits_2_and_writes_nothing(tmp_path, monkeypatch, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(TINY + "crowd:\n  radiuss: 0.3\n")
+    out = tmp_path / "out"
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", str(bad), "--out", str(out), "--quiet"]) == 2
+    captured = capsys.readouterr()
+    line = one_error_line(captured.err)
+    assert str(bad) in line and "crowd.radiuss" in line and "unknown key" in line and "expected one of" in line
+    assert captured.out == ""
+    assert not out.exists()
+    # without --out neither: no default runs/ directory appears
+    assert main(["run", str(bad), "--quiet"]) == 2
+    one_error_line(capsys.readouterr().err)
+    assert listing(tmp_path) == {"bad.yaml"}
+
+
+def test_run_into_non_empty_dir_is_refused_and_untouched(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    target = tmp_path / "results"
+    target.mkdir()
+    mine = target / "notes.txt"
+    mine.write_text("my precious notes\n")
+    before = mine.stat()
+    assert main(["run", "airport_disembarkation", "--out", str(target), "--quiet"]) == 2
+    captured = capsys.readouterr()
+    line = one_error_line(captured.err)
+    assert str(target) in line and "not empty" in line
+    assert captured.out == ""
+    assert listing(target) == {"notes.txt"}
+    assert mine.read_text() == "my precious notes\n"
+    assert (mine.stat().st_mtime_ns, mine.stat().st_size) == (before.st_mtime_ns, before.st_size)
+    assert listing(tmp_path) == {"results"}  # no temporary directory beside it
+
+
+def test_run_onto_an_existing_file_is_refused(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    target = tmp_path / "results"
+    target.write_text("not a directory\n")
+    assert main(["run", "airport_disembarkation", "--out", str(target), "--quiet"]) == 2
+    line = one_error_line(capsys.readouterr().err)
+    assert str(target) in line
+    assert target.read_text() == "not a directory\n"
+    assert listing(tmp_path) == {"results"}
+
+
+def test_run_function_refuses_non_empty_dir_before_writing(tmp_path):
+    # the library entry point checks as well, before it makes its temporary directory
+    target = tmp_path / "results"
+    target.mkdir()
+    (target / "keep").write_text("x")
+    with pytest.raises(RunDirError, match="not empty"):
+        run(load_scenario("airport_disembarkation"), target, progress=False)
+    assert listing(tmp_path) == {"results"} and listing(target) == {"keep"}
+
+
+def test_run_unknown_scenario_names_the_bundled_ones(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "NOT_A_SCENARIO"]) == 2
+    line = one_error_line(capsys.readouterr().err)
+    assert "NOT_A_SCENARIO" in line and "bundled" in line
+    for name in bundled_scenarios():
+        assert name in line
+    assert listing(tmp_path) == set()
+
+
+def test_run_negative_seed_names_seed(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "airport_disembarkation", "--seed", "-3"]) == 2
+    line = one_error_line(capsys.readouterr().err)
+    assert ": seed: " in line and "at least 0" in line and "airport_disembarkation.yaml" in line
+    assert listing(tmp_path) == set()
+
+
+def _tiny(tmp_path) -> Path:
+    path = tmp_path / "tiny.yaml"
+    path.write_text(TINY)
+    return path
+
+
+def test_short_run_writes_a_complete_run_directory(tmp_path, capsys):
+    scenario = _tiny(tmp_path)
+    out = tmp_path / "out"
+    assert main(["run", str(scenario), "--out", str(out), "--quiet"]) == 0
+    captured = capsys.readouterr()
+    assert listing(tmp_path) == {"tiny.yaml", "out"}  # the temporary directory was moved, not left behind
+    assert {"metrics.json", "groundtruth.csv", "tracks.csv", "summary.md", "topdown.png"} <= listing(out)
+    assert "recording.rrd" not in listing(out)
+    umask = os.umask(0)
+    os.umask(umask)
+    assert out.stat().st_mode & 0o777 == 0o777 & ~umask  # an ordinary directory, not mkdtemp's private 0700
+
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert {"scenario", "seed", "duration_s", "frames", "tracking", "timing"} <= set(metrics)
+    assert {"mota", "motp_m", "fp", "fn", "id_switches", "gt", "fp_rate", "miss_rate"} <= set(metrics["tracking"])
+    assert {"wall_s", "realtime_factor", "tracker_hz"} <= set(metrics["timing"])
+    assert metrics["scenario"] == "tiny_room" and metrics["seed"] == 3 and metrics["duration_s"] == 2.0
+    assert metrics["frames"] == 50  # 2 s of two 25 Hz lasers scanning together
+    assert metrics["tracking"]["gt"] > 0
+
+    for name in ("groundtruth.csv", "tracks.csv"):
+        lines = (out / name).read_text().splitlines()
+        assert lines[0] == CSV_HEADER == "frame,t,id,x,y,vx,vy"
+        assert all(len(row.split(",")) == 7 for row in lines[1:])
+    gt_rows = (out / "groundtruth.csv").read_text().splitlines()[1:]
+    assert len({row.split(",")[0] for row in gt_rows}) == metrics["frames"]
+    assert len(gt_rows) == metrics["tracking"]["gt"]
+    stamps = [float(row.split(",")[1]) for row in gt_rows]
+    assert 2.0 < min(stamps) and max(stamps) <= 4.0 + 1e-6  # recorded after the 2 s warm-up only
+
+    assert (out / "summary.md").read_text().startswith("# tiny_room")
+    png = (out / "topdown.png").read_bytes()
+    assert png[:8] == PNG_MAGIC and len(png) > 1000
+
+    header = next(line for line in captured.out.splitlines() if line.startswith("|"))
+    columns = [c.strip() for c in header.strip("|").split("|")]
+    assert columns[0] == "MOTA"
+    assert str(out) in captured.out
+
+
+def test_short_run_with_rrd_writes_a_recording(tmp_path, capsys):
+    scenario = _tiny(tmp_path)
+    out = tmp_path / "out"
+    assert main(["run", str(scenario), "--out", str(out), "--quiet", "--rrd", "--duration", "1"]) == 0
+    capsys.readouterr()
+    rrd = out / "recording.rrd"
+    assert rrd.is_file() and rrd.stat().st_size > 0
+    assert json.loads((out / "metrics.json").read_text())["duration_s"] == 1.0
+    assert listing(tmp_path) == {"tiny.yaml", "out"}
+
+
+def test_run_into_an_existing_empty_dir_is_allowed(tmp_path, capsys):
+    scenario = _tiny(tmp_path)
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main(["run", str(scenario), "--out", str(out), "--quiet", "--duration", "0.4"]) == 0
+    capsys.readouterr()
+    assert "metrics.json" in listing(out)
+    assert listing(tmp_path) == {"tiny.yaml", "out"}
+    assert os.path.isdir(out)
+
+
+@pytest.mark.parametrize("exc", [RuntimeError("boom"), KeyboardInterrupt()], ids=["error", "interrupt"])
+def test_failed_run_leaves_nothing_half_written(tmp_path, monkeypatch, exc):
+    def fail_midway(scenario, tmp, rrd, progress):
+        (tmp / "groundtruth.csv").write_text(CSV_HEADER + "\n")  # something half-written
+        raise exc
+
+    monkeypatch.setattr("crowdsim.run._simulate", fail_midway)
+    out = tmp_path / "deep" / "er" / "out"  # parents the run creates go too
+    with pytest.raises(type(exc)):
+        run(load_scenario(str(_tiny(tmp_path))), out, progress=False)
+    assert not out.exists()
+    assert listing(tmp_path) == {"tiny.yaml"}
