@@ -25,10 +25,3 @@ def transform_points(pose: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Points [n, 2] given in the frame ``pose`` describes, expressed in that pose's parent frame."""
     c, s = np.cos(pose[2]), np.sin(pose[2])
     return points @ np.array([[c, s], [-s, c]]) + pose[:2]
-
-
-def rotate_covariances(yaw: float, cov: np.ndarray) -> np.ndarray:
-    """2x2 covariances [n, 2, 2] rotated by ``yaw``: R C R^T."""
-    c, s = np.cos(yaw), np.sin(yaw)
-    rot = np.array([[c, -s], [s, c]])
-    return rot @ cov @ rot.T

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from .frames import rotate_covariances, transform_points
+from .frames import transform_points
 from .types import DetectedPersons
 
 
@@ -14,8 +14,9 @@ def to_frame(dets: DetectedPersons, pose: np.ndarray, frame: str) -> DetectedPer
     """Detections expressed in ``frame``, given the pose of their frame in it."""
     pos = dets.position.copy()
     pos[:, :2] = transform_points(pose, dets.position[:, :2])
-    cov = dets.covariance.copy()
-    cov[:, :2, :2] = rotate_covariances(pose[2], dets.covariance[:, :2, :2])
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])  # a yaw: x-z and y-z terms turn too
+    cov = rot @ dets.covariance @ rot.T
     return DetectedPersons(dets.stamp, frame, dets.modality, dets.detection_id, pos, cov, dets.confidence)
 
 

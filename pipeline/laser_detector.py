@@ -44,7 +44,9 @@ class SegmentDetector:
         normal = np.stack([chord[:, 1], -chord[:, 0]], 1) / np.maximum(width, 1e-9)[:, None]
         normal *= np.where(np.einsum("ij,ij->i", normal, first) > 0, -1.0, 1.0)[:, None]
         bulge_pt = np.einsum("ij,ij->i", p - first[labels], normal[labels])
-        bulge = np.maximum.reduceat(bulge_pt, starts)
+        # the mean over the interior points (the chord's ends lie on it by construction), not the largest depth:
+        # one noisy return must not make a flat wall piece look round
+        bulge = np.add.reduceat(bulge_pt, starts) / np.maximum(count - 2, 1)
         centroid = np.add.reduceat(p, starts) / count[:, None]
         keep = ((count >= self.p["min_points"]) & (width >= self.p["min_width"]) & (width <= self.p["max_width"])
                 & (bulge >= self.p["min_bulge"]))

@@ -87,7 +87,7 @@ DETECTOR = Schema({
     "min_points": F("int", 3, min=1, doc="seed 000 Sec. IV-C: far echoes of fewer than 3 points are unreliable"),
     "min_width": F("float", 0.1, min=0.0, doc="m, narrowest segment taken for a person"),
     "max_width": F("float", 0.9, min=0.0, doc="m, widest segment taken for a person"),
-    "min_bulge": F("float", 0.03, min=0.0, doc="m, least depth of the segment behind its chord (walls are flat)"),
+    "min_bulge": F("float", 0.03, min=0.0, doc="m, least mean depth of the interior points behind the chord (walls are flat)"),
     "position_variance": F("float", 0.1, min=0.0, exclusive_min=True,
                            doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)"),
 })

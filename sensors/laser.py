@@ -21,11 +21,13 @@ class Laser:
         self.rng = rng
         self.mount = np.array(params["mount"], float)
         fov, res = np.radians(params["fov_deg"]), np.radians(params["resolution_deg"])
-        self.n_beams = int(round(fov / res)) + 1
+        full_circle = params["fov_deg"] >= 360.0
+        # a full circle has no last beam: it would repeat the first
+        self.n_beams = int(round(fov / res)) + (0 if full_circle else 1)
         if self.n_beams < 2:
             raise ValueError(f"laser {self.name}: fov_deg / resolution_deg gives {self.n_beams} beam(s); expected >= 2")
         self.angle_min = -fov / 2
-        self.angle_increment = fov / (self.n_beams - 1)
+        self.angle_increment = fov / (self.n_beams if full_circle else self.n_beams - 1)
         self.angles = self.angle_min + self.angle_increment * np.arange(self.n_beams)
         self.period = 1.0 / params["rate"]
         self._vec = np.zeros((self.n_beams, 3))

@@ -1,7 +1,7 @@
 """The MuJoCo scene: static walls and obstacles, the robot and a pool of person bodies moved as mocap bodies.
 
 No contact physics runs: bodies are placed every tick and MuJoCo is used for ray casting (and later rendering).
-Person bodies beyond the number alive are parked below the floor, where no horizontal ray reaches them.
+Person bodies beyond the number alive are parked below the floor and made transparent, which ray casting skips.
 """
 
 from __future__ import annotations
@@ -71,6 +71,9 @@ class Scene:
         pos[:n, :2] = person_xy
         pos[:n, 2] = 0.0
         pos[n:] = (0.0, 0.0, PARKED_Z)
+        # MuJoCo's ray casting skips geoms with alpha 0: parked slots then cost nothing per beam
+        self.model.geom_rgba[self.first_person_geom:self.first_person_geom + self.capacity, 3] = 0.0
+        self.model.geom_rgba[self.first_person_geom:self.first_person_geom + n, 3] = 1.0
         self.slot_person_id[:n] = person_ids
         self.slot_person_id[n:] = -1
         mujoco.mj_kinematics(self.model, d)

@@ -1,0 +1,207 @@
+"""MuJoCo-cast 2D lasers against hand-worked ray-plane and ray-circle intersections.
+
+Geometry used throughout: a wall segment from (5, -30) to (5, 30) is a box of thickness WALL_THICKNESS = 0.1 centred
+on the segment, so the face the robot sees is the plane x = 5 - 0.05 = 4.95 (and x = -4.95 for the wall at x = -5).
+A person is a vertical cylinder of radius PERSON_HIP_RADIUS = 0.18; the beams are horizontal at 0.70 m, below the
+wall top (2.5 m), the person top (1.75 m) and the robot top (1.6 m), so they meet each solid in its 2D section.
+"""
+
+import mujoco
+import numpy as np
+import pytest
+
+from scenarios.format import LASER
+from scenarios.schema import validate
+from sensors.laser import Laser
+from sensors.scene import PERSON_HIP_RADIUS, WALL_THICKNESS, Scene
+
+FRONT_WALL = [[5.0, -30.0], [5.0, 30.0]]
+REAR_WALL = [[-5.0, -30.0], [-5.0, 30.0]]
+FACE = 5.0 - WALL_THICKNESS / 2  # 4.95
+WALL_HALF_LENGTH = 30.0 + WALL_THICKNESS / 2  # the box is padded by half a thickness at each end
+
+
+def laser_params(**over) -> dict:
+    """A laser dict as the scenario loader gives it: the LASER schema's defaults plus ``over``."""
+    raw = {"name": "front_laser", "mount": [0.25, 0.0, 0.0]}
+    raw.update(over)
+    return validate(raw, LASER, "<test>")
+
+
+def analytic_ranges(pose, angles, faces=(), circles=(), range_max=20.0):
+    """Exact first-hit distances of horizontal beams from the laser pose (x, y, yaw), NaN beyond range_max.
+
+    ``faces`` are planes x = x_f (wall faces, valid for |y| <= WALL_HALF_LENGTH); ``circles`` are (cx, cy) of
+    radius PERSON_HIP_RADIUS. Returns (ranges, index of the circle hit or -1).
+    """
+    a = pose[2] + np.asarray(angles)
+    u = np.stack([np.cos(a), np.sin(a)], 1)
+    o = np.asarray(pose[:2], float)
+    best = np.full(a.size, np.inf)
+    which = np.full(a.size, -1)
+    for xf in faces:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (xf - o[0]) / u[:, 0]  # ray-plane: o_x + t u_x = x_f
+        y = o[1] + t * u[:, 1]
+        t = np.where((t > 0) & (np.abs(y) <= WALL_HALF_LENGTH), t, np.inf)
+        closer = t < best
+        best[closer], which[closer] = t[closer], -1
+    for k, c in enumerate(circles):
+        oc = np.asarray(c, float) - o
+        b = u @ oc  # ray-circle: |o + t u - c|^2 = r^2  ->  t = b - sqrt(b^2 - |oc|^2 + r^2)
+        disc = b * b - (oc @ oc - PERSON_HIP_RADIUS**2)
+        t = np.where(disc >= 0, b - np.sqrt(np.maximum(disc, 0.0)), np.inf)
+        t = np.where(t > 0, t, np.inf)
+        closer = t < best
+        best[closer], which[closer] = t[closer], k
+    ranges = np.where(best <= range_max, best, np.nan)
+    return ranges, np.where(np.isfinite(ranges), which, -1)
+
+
+def make(walls, persons=(), ids=None, robot_pose=(0.0, 0.0, 0.0), robot_radius=0.425, capacity=4, seed=0, **over):
+    scene = Scene(np.array(walls, float).reshape(-1, 2, 2), robot_radius, capacity)
+    ids = np.arange(len(persons)) + 100 if ids is None else np.asarray(ids)
+    scene.sync(np.array(robot_pose, float), ids, np.array(persons, float).reshape(-1, 2))
+    laser = Laser(laser_params(**over), scene, np.random.default_rng(seed))
+    return scene, laser
+
+
+def test_beam_layout_of_the_default_laser():
+    # 190 deg / 0.5 deg = 380 intervals -> 381 beams from -95 deg to +95 deg in 0.5 deg steps.
+    _, laser = make([FRONT_WALL])
+    scan = laser.scan(1.5, np.zeros(3))
+    assert scan.ranges.shape == (381,) and scan.person_id.shape == (381,)
+    assert scan.angle_min == pytest.approx(np.radians(-95.0))
+    assert scan.angle_increment == pytest.approx(np.radians(0.5))
+    assert scan.angles[-1] == pytest.approx(np.radians(95.0))
+    assert scan.angles[190] == pytest.approx(0.0, abs=1e-12)
+    assert scan.stamp == 1.5 and scan.frame == "front_laser" and scan.range_max == 20.0
+
+
+def test_noisy_ranges_match_wall_and_person_within_noise():
+    # Robot at the origin, laser at (0.25, 0) facing +x, person (id 7) at (3, 1).
+    # Wall beams: t = (4.95 - 0.25) / cos(a), a hit while t <= 20 m, i.e. |a| <= acos(4.7 / 20) = 76.4 deg.
+    # Person beams: t = b - sqrt(b^2 - |c - o|^2 + r^2), b = u . (c - o), for |a - atan2(1, 2.75)| <= asin(r/|c-o|).
+    sigma = 0.012
+    _, laser = make([FRONT_WALL], persons=[(3.0, 1.0)], ids=[7], seed=2)
+    scan = laser.scan(0.0, np.zeros(3))
+    pose = laser.pose_in(np.zeros(3))
+    np.testing.assert_allclose(pose, [0.25, 0.0, 0.0])
+    expect, which = analytic_ranges(pose, laser.angles, faces=[FACE], circles=[(3.0, 1.0)])
+
+    # the same beams return, and every return is within 4 sigma of the exact range
+    np.testing.assert_array_equal(np.isfinite(scan.ranges), np.isfinite(expect))
+    hit = np.isfinite(expect)
+    assert np.all(np.abs(scan.ranges[hit] - expect[hit]) <= 4 * sigma)
+
+    # person: centre at atan2(1, 2.75) = 19.98 deg, half-width asin(0.18 / 2.926) = 3.53 deg -> beams at
+    # 16.5 .. 23.5 deg, 15 of them; wall: |a| <= 76.4 deg -> beams -76 .. 76 deg, 305 in all returning
+    on_person = which == 0
+    assert on_person.sum() == 15
+    np.testing.assert_allclose(np.degrees(laser.angles[on_person][[0, -1]]), [16.5, 23.5])
+    assert hit.sum() == 305
+    np.testing.assert_array_equal(scan.person_id, np.where(on_person, 7, -1))
+
+    # noise statistics over the wall beams: unbiased and with the configured sigma
+    err = (scan.ranges - expect)[hit & ~on_person]
+    n = err.size
+    assert abs(err.mean()) <= 4 * sigma / np.sqrt(n)
+    assert err.std(ddof=1) == pytest.approx(sigma, rel=0.10)
+
+
+def test_noise_free_ranges_are_exact_for_a_turned_robot():
+    # Robot at (1, 0.5) turned by 0.3 rad: the laser sits at (1 + 0.25 cos 0.3, 0.5 + 0.25 sin 0.3) facing 0.3 rad.
+    robot = np.array([1.0, 0.5, 0.3])
+    _, laser = make([FRONT_WALL], persons=[(3.0, 1.0), (2.5, 2.5)], ids=[3, 4], robot_pose=robot, noise_sigma=0.0)
+    scan = laser.scan(0.0, robot)
+    pose = np.array([1.0 + 0.25 * np.cos(0.3), 0.5 + 0.25 * np.sin(0.3), 0.3])
+    expect, which = analytic_ranges(pose, laser.angles, faces=[FACE], circles=[(3.0, 1.0), (2.5, 2.5)])
+    np.testing.assert_array_equal(np.isfinite(scan.ranges), np.isfinite(expect))
+    np.testing.assert_allclose(scan.ranges, expect, atol=1e-6, equal_nan=True)
+    np.testing.assert_array_equal(scan.person_id, np.select([which == 0, which == 1], [3, 4], -1))
+    assert (which == 0).any() and (which == 1).any()
+
+
+def test_rear_laser_sees_behind_the_robot_and_never_its_own_body():
+    # Robot radius 1 m: both laser origins (+-0.25 m) are inside the robot's cylinder. Without excluding the robot,
+    # a beam from (-0.25, 0) pointing backwards would leave the cylinder at 1 - 0.25 = 0.75 m (checked below).
+    # Rear laser at (-0.25, 0) facing pi: the beam at 0 deg meets the face x = -4.95 at 4.95 - 0.25 = 4.70 m;
+    # the person at (-3, -1) lies at 2.75 m behind and 1 m to the laser's left (its +y is the world -y).
+    robot = np.zeros(3)
+    scene, laser = make([FRONT_WALL, REAR_WALL], persons=[(-3.0, -1.0)], ids=[5], robot_radius=1.0,
+                        name="rear_laser", mount=[-0.25, 0.0, float(np.pi)], noise_sigma=0.0)
+    geom = np.zeros(1, np.int32)
+    unexcluded = mujoco.mj_ray(scene.model, scene.data, np.array([-0.25, 0.0, 0.70]), np.array([-1.0, 0.0, 0.0]),
+                               None, 1, -1, geom)
+    assert unexcluded == pytest.approx(0.75)  # the robot body is really in the way of a naive cast
+
+    scan = laser.scan(0.0, robot)
+    pose = laser.pose_in(robot)
+    np.testing.assert_allclose(pose[:2], [-0.25, 0.0], atol=1e-12)
+    assert abs(abs(pose[2]) - np.pi) < 1e-12
+    assert scan.ranges[190] == pytest.approx(4.70, abs=1e-6)
+    expect, which = analytic_ranges(pose, laser.angles, faces=[-FACE], circles=[(-3.0, -1.0)])
+    np.testing.assert_allclose(scan.ranges, expect, atol=1e-6, equal_nan=True)
+    assert np.nanmin(scan.ranges) > 2.0  # nothing at the robot's 0.75 m
+    # in the rear laser's frame the person is at (2.75, 1): to its left, beams 16.5 .. 23.5 deg (as for the front
+    # laser in the test above, mirrored through the robot)
+    person_angles = np.degrees(scan.angles[scan.person_id == 5])
+    np.testing.assert_allclose(person_angles, np.arange(16.5, 23.6, 0.5), atol=1e-9)
+    np.testing.assert_array_equal(scan.person_id, np.where(which == 0, 5, -1))
+
+
+def test_beams_without_return_are_nan():
+    # Only the wall at x = +5; the laser on a robot turned by pi faces -x: its beams point at pi +- 95 deg, the
+    # most forward ones at 85 deg from +x, reaching x = 4.95 only after (4.95 + 0.25) / cos(85 deg) = 59.7 m > 20 m.
+    robot = np.array([0.0, 0.0, np.pi])
+    _, laser = make([FRONT_WALL], robot_pose=robot)
+    scan = laser.scan(0.0, robot)
+    assert np.all(np.isnan(scan.ranges))
+    assert np.all(scan.person_id == -1)
+
+
+def test_returns_beyond_range_max_are_nan():
+    # range_max 5 m, wall face at 4.70 m ahead: the beam at angle a returns while 4.70 / cos(a) <= 5,
+    # |a| <= acos(0.94) = 19.95 deg -> beams -19.5 .. 19.5 deg, 79 of them; the others are NaN.
+    _, laser = make([FRONT_WALL], range_max=5.0, noise_sigma=0.0)
+    scan = laser.scan(0.0, np.zeros(3))
+    finite = np.isfinite(scan.ranges)
+    assert finite.sum() == 79
+    np.testing.assert_allclose(np.degrees(scan.angles[finite][[0, -1]]), [-19.5, 19.5])
+    assert np.nanmax(scan.ranges) <= 5.0
+
+
+def test_parked_slots_are_never_hit_and_ids_follow_resync():
+    # Capacity 4. First three persons (ids 10, 11, 12) stand in front of the laser; then only id 99 is alive, placed
+    # where id 11 was. Slots 1..3 must be parked (no return from (3, 1) or (2, -0.5)), and the beams towards (3, -1)
+    # must now report id 99 (slot 0 reassigned), not 11.
+    walls = [FRONT_WALL]
+    scene, laser = make(walls, persons=[(3.0, 1.0), (3.0, -1.0), (2.0, -0.5)], ids=[10, 11, 12], noise_sigma=0.0)
+    pose = laser.pose_in(np.zeros(3))
+    first = laser.scan(0.0, np.zeros(3))
+    exp, which = analytic_ranges(pose, laser.angles, faces=[FACE], circles=[(3.0, 1.0), (3.0, -1.0), (2.0, -0.5)])
+    np.testing.assert_allclose(first.ranges, exp, atol=1e-6, equal_nan=True)
+    np.testing.assert_array_equal(first.person_id, np.select([which == 0, which == 1, which == 2], [10, 11, 12], -1))
+
+    scene.sync(np.zeros(3), np.array([99]), np.array([[3.0, -1.0]]))
+    second = laser.scan(0.04, np.zeros(3))
+    exp, which = analytic_ranges(pose, laser.angles, faces=[FACE], circles=[(3.0, -1.0)])
+    np.testing.assert_allclose(second.ranges, exp, atol=1e-6, equal_nan=True)
+    np.testing.assert_array_equal(second.person_id, np.where(which == 0, 99, -1))
+    assert set(np.unique(second.person_id)) == {-1, 99}
+
+
+def test_never_synced_slots_are_parked():
+    # Capacity 6 with one person synced: five slots were never placed; the scan equals wall + one person exactly.
+    _, laser = make([FRONT_WALL], persons=[(3.0, 1.0)], ids=[1], capacity=6, noise_sigma=0.0)
+    pose = laser.pose_in(np.zeros(3))
+    scan = laser.scan(0.0, np.zeros(3))
+    exp, which = analytic_ranges(pose, laser.angles, faces=[FACE], circles=[(3.0, 1.0)])
+    np.testing.assert_allclose(scan.ranges, exp, atol=1e-6, equal_nan=True)
+    np.testing.assert_array_equal(scan.person_id, np.where(which == 0, 1, -1))
+
+
+def test_sync_rejects_more_persons_than_capacity():
+    scene = Scene(np.array([FRONT_WALL], float), 0.425, 2)
+    with pytest.raises(ValueError, match="holds 2"):
+        scene.sync(np.zeros(3), np.arange(3), np.zeros((3, 2)))
