@@ -64,8 +64,7 @@ class Simulation:
         self.lasers = [Laser(p, self.scene, rngs[3 + k]) for k, p in enumerate(scenario["sensors"]["lasers"])]
         pipe = scenario["pipeline"]
         self.detectors = [SegmentDetector(pipe["detector"]) for _ in self.lasers]
-        tracker_params = {k: v for k, v in pipe["tracker"].items() if v is not None}
-        self.tracker = NearestNeighbourTracker(TrackerParams(**tracker_params), frame=TRACKING_FRAME)
+        self.tracker = NearestNeighbourTracker(TrackerParams(**pipe["tracker"]), frame=TRACKING_FRAME)
         ev = scenario["evaluation"]
         self.clearmot = ClearMot(ev["threshold"])
         self.max_range = ev["max_range"]

@@ -92,13 +92,14 @@ DETECTOR = Schema({
                            doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)"),
 })
 
-TRACKER = Schema({
-    "process_noise": F("float", None, min=0.0, exclusive_min=True, doc="m^2/s^3, q_L of seed 000 Eq. 2"),
-    "gate_chi2": F("float", None, min=0.0, exclusive_min=True, doc="Mahalanobis gate on the innovation"),
-    "n_confirm": F("int", None, min=1, doc="matches that confirm a new track"),
-    "n_delete": F("int", None, min=1, doc="misses that delete a confirmed track (seed 000 Sec. V-C: 5)"),
-    "n_delete_tentative": F("int", None, min=1, doc="misses that delete an unconfirmed track"),
-    "initial_velocity_variance": F("float", None, min=0.0, exclusive_min=True, doc="m^2/s^2 of a new track"),
+TRACKER = Schema({  # the defaults are pipeline.tracker.TrackerParams' (a test keeps the two equal)
+    "process_noise": F("float", 0.267, min=0.0, exclusive_min=True,
+                       doc="m^2/s^3, q_L of seed 000 Eq. 2 (its IMM's manoeuvre level, Sec. V-D)"),
+    "gate_chi2": F("float", 13.82, min=0.0, exclusive_min=True, doc="Mahalanobis gate (chi2 0.999 for 2 dof)"),
+    "n_confirm": F("int", 3, min=1, doc="detections that confirm a new track"),
+    "n_delete": F("int", 5, min=1, doc="misses that delete a confirmed track (seed 000 Sec. V-C: 5)"),
+    "n_delete_tentative": F("int", 2, min=1, doc="misses that delete an unconfirmed track"),
+    "initial_velocity_variance": F("float", 1.0, min=0.0, exclusive_min=True, doc="m^2/s^2 of a new track"),
 })
 
 PIPELINE = Schema({

@@ -348,3 +348,11 @@ def test_crowd_of_thirty_is_tracked_well():
     assert s["id_switches"] <= 5
     assert 60 <= s["fn"] <= 65
     assert s["motp_m"] < 0.06
+
+
+def test_scenario_schema_defaults_are_the_tracker_defaults():
+    from dataclasses import asdict
+
+    from scenarios.format import TRACKER
+
+    assert {k: f.default for k, f in TRACKER.fields.items()} == asdict(TrackerParams())
