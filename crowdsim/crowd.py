@@ -42,6 +42,8 @@ class _Source:
     route_ids: np.ndarray
     route_p: np.ndarray
     size_p: np.ndarray
+    type_ids: np.ndarray
+    type_p: np.ndarray
     next_time: float
 
 
@@ -55,6 +57,11 @@ class Crowd:
         self.walls = wall_segments(scenario)
         self._next_id = 1
         self._next_group = 1
+        types = self.p["agent_types"]
+        self.type_names = list(types)
+        self.type_speed = np.array([[t["speed_mean"], t["speed_std"], t["speed_min"], t["speed_max"]]
+                                    for t in types.values()]).reshape(-1, 4)
+        self.type_radius = np.array([t["radius"] for t in types.values()])
         names = self.route_names = list(scenario["routes"])
         wps = scenario["waypoints"]
         length = max((len(r["waypoints"]) for r in scenario["routes"].values()), default=1)
@@ -75,8 +82,11 @@ class Crowd:
             sizes = np.array(s["group_size_weights"], float)
             size_p = sizes / sizes.sum()
             mean_size = float((np.arange(1, sizes.size + 1) * size_p).sum())
+            type_w = np.array(list(s["agent_types"].values()), float)
             src = _Source(np.array(s["position"]), np.array(s["size"]), s["rate"] / mean_size, s["start"], s["stop"],
-                          np.array([names.index(r) for r in s["routes"]]), weights / weights.sum(), size_p, np.inf)
+                          np.array([names.index(r) for r in s["routes"]]), weights / weights.sum(), size_p,
+                          np.array([self.type_names.index(t) for t in s["agent_types"]]), type_w / type_w.sum(),
+                          np.inf)
             src.next_time = src.start + self._interval(src)
             self.sources.append(src)
         n = 0
@@ -85,6 +95,7 @@ class Crowd:
         self.vel = np.zeros((n, 2))
         self.v0 = np.zeros(n)
         self.radius = np.zeros(n)
+        self.kind = np.zeros(n, np.int64)  # index into type_names
         self.group = np.zeros(n, np.int64)
         self.route = np.zeros(n, np.int64)  # -1: standing at ``goal``
         self.wp = np.zeros(n, np.int64)
@@ -92,26 +103,28 @@ class Crowd:
         self.goal_radius = np.zeros(n)
         self.walked = np.zeros(n)
         for g in scenario["standing"]:
-            self._add_standing(np.array(g["position"], float), g["count"], g["spacing"])
+            self._add_standing(np.array(g["position"], float), g["count"], g["spacing"],
+                               self.type_names.index(g["agent_type"]))
 
     # -- population ---------------------------------------------------------------------------------------------
 
     def _interval(self, src: _Source) -> float:
         return float(self.rng.exponential(1.0 / src.rate)) if src.rate > 0 else np.inf
 
-    def _desired_speeds(self, n: int) -> np.ndarray:
-        p = self.p
-        v = self.rng.normal(p["desired_speed_mean"], p["desired_speed_std"], n)
-        return np.clip(v, p["desired_speed_min"], p["desired_speed_max"])
+    def _desired_speeds(self, kind: np.ndarray) -> np.ndarray:
+        """One draw per agent from its type's clipped normal distribution."""
+        mean, std, lo, hi = self.type_speed[kind].T
+        return np.clip(self.rng.normal(mean, std), lo, hi)
 
-    def _append(self, pos, v0, group, route, goal, goal_radius):
+    def _append(self, pos, v0, kind, group, route, goal, goal_radius):
         n = len(pos)
         self.id = np.concatenate([self.id, np.arange(self._next_id, self._next_id + n)])
         self._next_id += n
         self.pos = np.concatenate([self.pos, pos])
         self.vel = np.concatenate([self.vel, np.zeros((n, 2))])
         self.v0 = np.concatenate([self.v0, v0])
-        self.radius = np.concatenate([self.radius, np.full(n, self.p["radius"])])
+        self.kind = np.concatenate([self.kind, kind])
+        self.radius = np.concatenate([self.radius, self.type_radius[kind]])
         self.group = np.concatenate([self.group, np.full(n, group, np.int64)])
         self.route = np.concatenate([self.route, np.full(n, route, np.int64)])
         self.wp = np.concatenate([self.wp, np.zeros(n, np.int64)])
@@ -120,13 +133,14 @@ class Crowd:
         self.walked = np.concatenate([self.walked, np.zeros(n)])
 
     def add_walkers(self, positions: np.ndarray, route: str, desired_speed: float | None = None,
-                    group: bool = False) -> np.ndarray:
+                    group: bool = False, agent_type: str = "adult") -> np.ndarray:
         """Place persons at ``positions`` [n, 2] on the named route (for tests, benchmarks and scripted scenes);
-        returns their ids. Without ``desired_speed`` each draws their own."""
+        returns their ids. Without ``desired_speed`` each draws their own from the agent type's distribution."""
         k = self.route_names.index(route)
         n = len(positions)
-        v0 = np.full(n, desired_speed) if desired_speed is not None else self._desired_speeds(n)
-        self._append(np.asarray(positions, float), v0, self._new_group_id(n) if group else -1, k,
+        kind = np.full(n, self.type_names.index(agent_type))
+        v0 = np.full(n, float(desired_speed)) if desired_speed is not None else self._desired_speeds(kind)
+        self._append(np.asarray(positions, float), v0, kind, self._new_group_id(n) if group else -1, k,
                      np.repeat(self.route_goal[k, :1], n, 0), np.full(n, self.route_radius[k, 0]))
         return self.id[-n:].copy()
 
@@ -136,31 +150,37 @@ class Crowd:
         self._next_group += 1
         return self._next_group - 1
 
-    def _add_standing(self, centre: np.ndarray, count: int, spacing: float):
+    def _add_standing(self, centre: np.ndarray, count: int, spacing: float, type_index: int):
         if count == 1:
             pos = centre[None]
         else:
             ring = spacing / (2 * np.sin(np.pi / count))
             a = 2 * np.pi * np.arange(count) / count + self.rng.uniform(0, 2 * np.pi)
             pos = centre + ring * np.stack([np.cos(a), np.sin(a)], 1)
-        self._append(pos, self._desired_speeds(count), self._new_group_id(count), -1, pos.copy(), np.full(count, 0.1))
+        kind = np.full(count, type_index)
+        self._append(pos, self._desired_speeds(kind), kind, self._new_group_id(count), -1, pos.copy(),
+                     np.full(count, 0.1))
 
     def _emit(self, src: _Source) -> bool:
         """Emit one group at ``src`` if its area is clear; False when it must wait."""
         size = 1 + int(self.rng.choice(src.size_p.size, p=src.size_p))
         route = int(src.route_ids[self.rng.choice(src.route_ids.size, p=src.route_p)])
-        r = self.p["radius"]
-        centre = src.position + self.rng.uniform(-0.5, 0.5, 2) * np.maximum(src.size - 2 * r, 0)
+        kind = src.type_ids[self.rng.choice(src.type_ids.size, size=size, p=src.type_p)]
+        r = self.type_radius[kind]
+        centre = src.position + self.rng.uniform(-0.5, 0.5, 2) * np.maximum(src.size - 2 * r.max(), 0)
         heading = self.route_goal[route, 0] - centre
         side = np.array([-heading[1], heading[0]]) / max(np.linalg.norm(heading), 1e-9)
-        offsets = (np.arange(size) - (size - 1) / 2) * (2 * r + 0.1)
+        offsets = (np.arange(size) - (size - 1) / 2) * (2 * r.max() + 0.1)
         pos = centre + offsets[:, None] * side
         if len(self.pos) + size > self.p["max_agents"]:
             return False
-        if len(self.pos) and np.min(np.linalg.norm(pos[:, None] - self.pos[None], axis=-1)) < 2 * r + 0.05:
-            return False
-        v0 = np.full(size, self._desired_speeds(1)[0]) if size > 1 else self._desired_speeds(1)
-        self._append(pos, v0, self._new_group_id(size), route, np.repeat(self.route_goal[route, :1], size, 0),
+        if len(self.pos):
+            gap = np.linalg.norm(pos[:, None] - self.pos[None], axis=-1) - r[:, None] - self.radius[None]
+            if gap.min() < 0.05:
+                return False
+        # a group walks at the pace of its slowest member (Moussaid et al. 2010: groups walk slower)
+        v0 = np.full(size, self._desired_speeds(kind).min())
+        self._append(pos, v0, kind, self._new_group_id(size), route, np.repeat(self.route_goal[route, :1], size, 0),
                      np.full(size, self.route_radius[route, 0]))
         return True
 
@@ -173,7 +193,7 @@ class Crowd:
                 src.next_time += self._interval(src)
 
     def _remove(self, keep: np.ndarray):
-        for name in ("id", "pos", "vel", "v0", "radius", "group", "route", "wp", "goal", "goal_radius", "walked"):
+        for name in ("id", "pos", "vel", "v0", "kind", "radius", "group", "route", "wp", "goal", "goal_radius", "walked"):
             setattr(self, name, getattr(self, name)[keep])
 
     def _advance_waypoints(self):

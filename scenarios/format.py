@@ -11,12 +11,24 @@ from .schema import Field, ListOf, MapOf, Schema
 
 F = Field
 
-CROWD = Schema({
+AGENT_TYPE = Schema({
+    "speed_mean": F("float", 1.34, min=0.0, doc="m/s, mean desired speed"),
+    "speed_std": F("float", 0.26, min=0.0, doc="m/s, standard deviation of the desired speed"),
+    "speed_min": F("float", 0.6, min=0.0, doc="m/s, lower clip of the drawn desired speed"),
+    "speed_max": F("float", 2.0, min=0.0, doc="m/s, upper clip of the drawn desired speed"),
     "radius": F("float", 0.25, min=0.05, max=1.0, doc="m, body radius for contacts (shoulder half-width)"),
-    "desired_speed_mean": F("float", 1.34, min=0.0, doc="m/s, Helbing & Molnar 1995 (N(1.34, 0.26))"),
-    "desired_speed_std": F("float", 0.26, min=0.0, doc="m/s, Helbing & Molnar 1995"),
-    "desired_speed_min": F("float", 0.6, min=0.0, doc="m/s, lower clip of the drawn desired speed"),
-    "desired_speed_max": F("float", 2.0, min=0.0, doc="m/s, upper clip of the drawn desired speed"),
+})
+
+# adults: Helbing & Molnar 1995, N(1.34, 0.26) m/s. Children and elders walk slower and are smaller; these values
+# are assumptions of the order Weidmann's age curve gives, not measurements.
+DEFAULT_AGENT_TYPES = {
+    "adult": {"speed_mean": 1.34, "speed_std": 0.26, "speed_min": 0.6, "speed_max": 2.0, "radius": 0.25},
+    "child": {"speed_mean": 1.1, "speed_std": 0.2, "speed_min": 0.5, "speed_max": 1.6, "radius": 0.18},
+    "elder": {"speed_mean": 0.9, "speed_std": 0.2, "speed_min": 0.4, "speed_max": 1.4, "radius": 0.23},
+}
+
+CROWD = Schema({
+    "agent_types": F(MapOf(F(AGENT_TYPE)), DEFAULT_AGENT_TYPES, doc="type name -> speed distribution and size"),
     "max_speed_factor": F("float", 1.3, min=1.0, doc="maximum speed = factor x desired speed (Helbing & Molnar 1995)"),
     "relaxation_time": F("float", 0.5, min=0.0, exclusive_min=True, doc="s, tau of the desired force (HM 1995)"),
     "agent_strength": F("float", 2.1, min=0.0, doc="m^2/s^2, V0 of the elliptical agent potential (HM 1995)"),
@@ -52,12 +64,14 @@ SOURCE = Schema({
     "routes": F(MapOf(F("float", min=0.0)), required=True, doc="route name -> relative weight"),
     "group_size_weights": F(ListOf(F("float", min=0.0), min_items=1), [1.0],
                             doc="relative weights of group sizes 1, 2, 3, ..."),
+    "agent_types": F(MapOf(F("float", min=0.0)), {"adult": 1.0}, doc="agent type name -> relative weight"),
 })
 
 STANDING = Schema({
     "position": F("point", required=True, doc="m, centre of the standing group"),
     "count": F("int", 1, min=1, max=12, doc="persons in the group (1 for a single standing person)"),
     "spacing": F("float", 0.9, min=0.0, doc="m, distance between neighbours on the group's circle"),
+    "agent_type": F("str", "adult", doc="agent type of the group's members"),
 })
 
 ROBOT = Schema({

@@ -69,8 +69,22 @@ def scenario_from_dict(raw: dict, source: str = "<scenario>") -> dict:
 def check_geometry(scenario: dict, source: str) -> None:
     """Cross-key checks: names that must exist, places that must be walkable, limits that must be ordered."""
     crowd = scenario["crowd"]
-    if crowd["desired_speed_min"] > crowd["desired_speed_max"]:
-        raise ScenarioError(source, "crowd.desired_speed_min", "expected at most crowd.desired_speed_max")
+    types = crowd["agent_types"]
+    for name, t in types.items():
+        if t["speed_min"] > t["speed_max"]:
+            raise ScenarioError(source, f"crowd.agent_types.{name}.speed_min",
+                                f"expected at most crowd.agent_types.{name}.speed_max")
+    known = ", ".join(types)
+    for i, src in enumerate(scenario["sources"]):
+        for name in src["agent_types"]:
+            if name not in types:
+                raise ScenarioError(source, f"sources[{i}].agent_types.{name}",
+                                    f"unknown agent type; expected one of: {known}")
+        if sum(src["agent_types"].values()) <= 0:
+            raise ScenarioError(source, f"sources[{i}].agent_types", "expected at least one positive weight")
+    for i, g in enumerate(scenario["standing"]):
+        if g["agent_type"] not in types:
+            raise ScenarioError(source, f"standing[{i}].agent_type", f"unknown agent type; expected one of: {known}")
     for name, route in scenario["routes"].items():
         for i, wp in enumerate(route["waypoints"]):
             if wp not in scenario["waypoints"]:
@@ -86,7 +100,7 @@ def check_geometry(scenario: dict, source: str) -> None:
         if src["stop"] < src["start"]:
             raise ScenarioError(source, f"sources[{i}].stop", f"expected a time after sources[{i}].start")
     segs = wall_segments(scenario)
-    radius = crowd["radius"]
+    radius = max(t["radius"] for t in types.values()) if types else 0.25
     places = [(f"waypoints.{n}.position", w["position"], "goal") for n, w in scenario["waypoints"].items()]
     places += [(f"sources[{i}].position", s["position"], "source") for i, s in enumerate(scenario["sources"])]
     places += [(f"standing[{i}].position", s["position"], "standing place") for i, s in enumerate(scenario["standing"])]
@@ -103,4 +117,4 @@ def check_geometry(scenario: dict, source: str) -> None:
         if ins or d < radius:
             where = "inside an obstacle" if ins else f"{d:.2f} m from a wall"
             raise ScenarioError(source, key, f"{what} {p} lies inside a wall ({where}); expected at least "
-                                             f"{radius} m (crowd.radius) of clearance from every wall")
+                                             f"{radius} m (the largest body radius) of clearance from every wall")

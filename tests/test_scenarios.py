@@ -78,7 +78,7 @@ def test_unknown_nested_key(tmp_path):
     message = expect_error(path, "crowd.radiuss", "unknown key", "expected one of:")
     listed = [k.strip() for k in message.split("expected one of:")[1].split(",")]
     assert listed == list(CROWD.fields)
-    assert "radius" in listed
+    assert "agent_types" in listed
 
 
 def test_unknown_key_inside_a_list_item(tmp_path):
@@ -170,10 +170,10 @@ def test_empty_laser_list(tmp_path):
 
 def test_goal_near_a_wall(tmp_path):
     data = base()
-    data["waypoints"]["by_the_wall"] = {"position": [10, 0.1]}  # 0.1 m from the wall y = 0; crowd.radius 0.25
+    data["waypoints"]["by_the_wall"] = {"position": [10, 0.1]}  # 0.1 m from the wall y = 0; adults are 0.25 m
     path = write(tmp_path, data)
     message = expect_error(path, "waypoints.by_the_wall.position", "goal", "inside a wall", "0.10 m from a wall",
-                           "crowd.radius")
+                           "largest body radius")
     assert "\n" not in message
 
 
@@ -220,11 +220,17 @@ def test_source_routes_all_zero(tmp_path):
     expect_error(path, "sources[0].routes", "positive weight")
 
 
-def test_desired_speed_limits_ordered(tmp_path):
+def test_agent_type_speed_limits_ordered(tmp_path):
     data = base()
-    data["crowd"] = {"desired_speed_min": 2.5, "desired_speed_max": 2.0}
+    data["crowd"] = {"agent_types": {"adult": {"speed_min": 2.5, "speed_max": 2.0}}}
     path = write(tmp_path, data)
-    expect_error(path, "crowd.desired_speed_min", "at most crowd.desired_speed_max")
+    expect_error(path, "crowd.agent_types.adult.speed_min", "at most crowd.agent_types.adult.speed_max")
+
+
+def test_unknown_agent_type_is_named(tmp_path):
+    data = base()
+    data["sources"][0]["agent_types"] = {"adult": 1.0, "giant": 0.5}
+    expect_error(write(tmp_path, data), "sources[0].agent_types.giant", "unknown agent type", "adult, child, elder")
 
 
 # --- missing keys, bad files -------------------------------------------------------------------------------------
@@ -323,8 +329,8 @@ def test_airport_has_the_documented_values():
         assert laser["resolution_deg"] == 0.5
         assert laser["range_max"] == 20.0
     crowd = sc["crowd"]
-    assert crowd["desired_speed_mean"] == 1.34
-    assert crowd["desired_speed_std"] == 0.26
+    assert crowd["agent_types"]["adult"]["speed_mean"] == 1.34
+    assert crowd["agent_types"]["adult"]["speed_std"] == 0.26
     assert crowd["relaxation_time"] == 0.5
     assert crowd["max_speed_factor"] == 1.3
     grouped = [s for s in sc["sources"] if sum(s["group_size_weights"][1:]) > 0]
@@ -339,7 +345,8 @@ def test_defaults_are_filled(tmp_path):
     assert sc["evaluation"] == {"threshold": 1.0, "max_range": 20.0}
     assert sc["seed"] == 0 and sc["warmup"] == 0.0 and sc["dt"] == 0.04 and sc["description"] == ""
     assert sc["map"]["obstacles"] == [] and sc["standing"] == []
-    assert sc["crowd"]["radius"] == 0.25 and sc["crowd"]["desired_speed_mean"] == 1.34
+    adult = sc["crowd"]["agent_types"]["adult"]
+    assert adult["radius"] == 0.25 and adult["speed_mean"] == 1.34
     src = sc["sources"][0]
     assert src["size"] == [1.0, 1.0] and src["group_size_weights"] == [1.0]
     assert src["start"] == 0.0 and src["stop"] == math.inf
