@@ -12,7 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from scenarios.geometry import closest_on_segments, wall_segments
+from scenarios.geometry import closest_on_segments, segments_cross, wall_segments
+
+from . import forces
 
 CONTACT_ITERATIONS = 4
 ARRIVAL_RADIUS = 0.3  # m: standing people slow down within this distance of their spot, and return to it when pushed
@@ -102,6 +104,7 @@ class Crowd:
         self.goal = np.zeros((n, 2))
         self.goal_radius = np.zeros(n)
         self.walked = np.zeros(n)
+        self.slow_time = np.zeros(n)  # s spent walking at under a fifth of the desired speed
         for g in scenario["standing"]:
             self._add_standing(np.array(g["position"], float), g["count"], g["spacing"],
                                self.type_names.index(g["agent_type"]))
@@ -131,6 +134,7 @@ class Crowd:
         self.goal = np.concatenate([self.goal, goal])
         self.goal_radius = np.concatenate([self.goal_radius, goal_radius])
         self.walked = np.concatenate([self.walked, np.zeros(n)])
+        self.slow_time = np.concatenate([self.slow_time, np.zeros(n)])
 
     def add_walkers(self, positions: np.ndarray, route: str, desired_speed: float | None = None,
                     group: bool = False, agent_type: str = "adult") -> np.ndarray:
@@ -193,7 +197,8 @@ class Crowd:
                 src.next_time += self._interval(src)
 
     def _remove(self, keep: np.ndarray):
-        for name in ("id", "pos", "vel", "v0", "kind", "radius", "group", "route", "wp", "goal", "goal_radius", "walked"):
+        for name in ("id", "pos", "vel", "v0", "kind", "radius", "group", "route", "wp", "goal", "goal_radius", "walked",
+                     "slow_time"):
             setattr(self, name, getattr(self, name)[keep])
 
     def _advance_waypoints(self):
@@ -213,85 +218,61 @@ class Crowd:
 
     # -- forces -------------------------------------------------------------------------------------------------
 
-    def _in_view_weight(self, direction: np.ndarray, force: np.ndarray) -> np.ndarray:
-        """HM 1995 anisotropy: full weight for sources within the field of view, c for those behind."""
-        p = self.p
-        norm = np.linalg.norm(force, axis=-1)
-        seen = np.einsum("...k,...k->...", direction, -force) >= norm * np.cos(np.radians(p["fov_deg"]) / 2)
-        return np.where(seen, 1.0, p["out_of_view_weight"])
-
     def desired_direction(self) -> tuple[np.ndarray, np.ndarray]:
-        """Unit vectors towards the current goals and the desired speeds (standing people slow to their spot)."""
+        """Unit vectors towards the current goals and the desired speeds (standing people slow to their spot).
+
+        A walker held at a wall for ``stuck_time`` (a goal round a corner pins it there) slides along the wall
+        instead, towards the side nearer its goal, until it walks freely again (the escape PedSim lacks).
+        """
         to_goal = self.goal - self.pos
         dist = np.linalg.norm(to_goal, axis=1)
         e = to_goal / np.maximum(dist, 1e-9)[:, None]
         speed = np.where(self.route >= 0, self.v0, self.v0 * np.clip(dist / ARRIVAL_RADIUS, 0.0, 1.0))
+        stuck = np.flatnonzero(self.slow_time >= self.p["stuck_time"])
+        if len(stuck) and len(self.walls):
+            away, d = closest_on_segments(self.pos[stuck], self.walls)
+            k = np.argmin(d, axis=1)
+            touching = d[np.arange(len(stuck)), k] < self.radius[stuck] + 0.3
+            seg = self.walls[k, 1] - self.walls[k, 0]
+            tangent = seg / np.maximum(np.linalg.norm(seg, axis=1), 1e-9)[:, None]
+            tangent *= np.where(np.einsum("ij,ij->i", tangent, e[stuck]) >= 0, 1.0, -1.0)[:, None]
+            e[stuck[touching]] = tangent[touching]
         return e, speed
 
-    def agent_forces(self, e: np.ndarray) -> np.ndarray:
-        """HM 1995 elliptical repulsion between neighbours, summed per agent (component arrays: it is the hot loop)."""
+    def interaction_forces(self, e: np.ndarray) -> np.ndarray:
+        """The configured agent-agent force over neighbour pairs from a k-d tree (O(N log N), not O(N^2))."""
         p = self.p
         n = len(self.pos)
-        if n < 2:
-            return np.zeros((n, 2))
-        pairs = cKDTree(self.pos).query_pairs(p["interaction_range"], output_type="ndarray")
+        pairs = (cKDTree(self.pos).query_pairs(p["interaction_range"], output_type="ndarray") if n > 1
+                 else np.zeros((0, 2), np.int64))
         if len(pairs) == 0:
             return np.zeros((n, 2))
         i = np.concatenate([pairs[:, 0], pairs[:, 1]])
         j = np.concatenate([pairs[:, 1], pairs[:, 0]])
-        rx, ry = self.pos[i, 0] - self.pos[j, 0], self.pos[i, 1] - self.pos[j, 1]
-        vx, vy = self.vel[j, 0], self.vel[j, 1]
-        speed_j = np.sqrt(vx * vx + vy * vy)
-        step = speed_j * p["step_time"]
-        scale = p["step_time"]  # y = r - step * v_j / |v_j| = r - step_time * v_j
-        yx, yy = rx - scale * vx, ry - scale * vy
-        nr = np.maximum(np.sqrt(rx * rx + ry * ry), 1e-6)
-        ny = np.maximum(np.sqrt(yx * yx + yy * yy), 1e-6)
-        b = 0.5 * np.sqrt(np.maximum((nr + ny) ** 2 - step**2, 0.0))
-        b = np.maximum(b, 0.05)  # keeps the gradient finite when i stands exactly in j's path
-        mag = p["agent_strength"] / p["agent_range"] * np.exp(-b / p["agent_range"]) * (nr + ny) / (4 * b)
-        fx = mag * (rx / nr + yx / ny)
-        fy = mag * (ry / nr + yy / ny)
-        # HM 1995 anisotropy: full weight when the source lies within the field of view, c otherwise
-        fn = np.sqrt(fx * fx + fy * fy)
-        seen = -(e[i, 0] * fx + e[i, 1] * fy) >= fn * np.cos(np.radians(p["fov_deg"]) / 2)
-        w = np.where(seen, 1.0, p["out_of_view_weight"])
-        return np.stack([np.bincount(i, w * fx, n), np.bincount(i, w * fy, n)], axis=1)
+        if p["interaction"] == "moussaid2009":
+            return forces.moussaid2009(self.pos, self.vel, i, j, p["moussaid_strength"], p["moussaid_lambda"],
+                                       p["moussaid_gamma"], p["moussaid_n"], p["moussaid_n_prime"],
+                                       walking=self.route >= 0)
+        return forces.helbing_molnar1995(self.pos, self.vel, e, i, j, p["agent_strength"], p["agent_range"],
+                                         p["step_time"], p["fov_deg"], p["out_of_view_weight"])
 
-    def wall_forces(self, e: np.ndarray) -> np.ndarray:
-        """HM 1995 exponential repulsion from every wall segment within range (not only the nearest)."""
+    def acceleration(self, robot_pos: np.ndarray | None, robot_radius: float) -> np.ndarray:
+        """The sum of every force term on every agent."""
         p = self.p
-        if len(self.walls) == 0 or len(self.pos) == 0:
-            return np.zeros_like(self.pos)
-        away, dist = closest_on_segments(self.pos, self.walls)
-        near = dist < p["wall_interaction_range"]
-        mag = np.where(near, p["wall_strength"] / p["wall_range"] * np.exp(-dist / p["wall_range"]), 0.0)
-        f = mag[..., None] * away / np.maximum(dist, 1e-9)[..., None]
-        f *= self._in_view_weight(e[:, None, :], f)[..., None]
-        return f.sum(axis=1)
-
-    def robot_forces(self, e: np.ndarray, robot_pos: np.ndarray, robot_radius: float) -> np.ndarray:
-        p = self.p
-        away = self.pos - robot_pos
-        dist = np.maximum(np.linalg.norm(away, axis=1), 1e-9)
-        gap = np.maximum(dist - robot_radius, 0.0)
-        f = (p["robot_strength"] / p["wall_range"] * np.exp(-gap / p["wall_range"]))[:, None] * away / dist[:, None]
-        return f * self._in_view_weight(e, f)[:, None]
-
-    def group_forces(self) -> np.ndarray:
-        """Moussaid et al. 2010 coherence: walking group members beyond (N-1)/2 m of the centroid are pulled back."""
-        walking_group = (self.group >= 0) & (self.route >= 0)
-        f = np.zeros_like(self.pos)
-        if not walking_group.any():
-            return f
-        idx = np.flatnonzero(walking_group)
-        _, inv, counts = np.unique(self.group[idx], return_inverse=True, return_counts=True)
-        centroid = np.stack([np.bincount(inv, self.pos[idx, k]) for k in (0, 1)], 1) / counts[:, None]
-        to_c = centroid[inv] - self.pos[idx]
-        dist = np.linalg.norm(to_c, axis=1)
-        pull = dist > (counts[inv] - 1) / 2
-        f[idx[pull]] = self.p["group_attraction"] * to_c[pull] / dist[pull, None]
-        return f
+        e, speed = self.desired_direction()
+        acc = forces.desired_force(e, speed, self.vel, p["relaxation_time"])
+        acc += self.interaction_forces(e)
+        acc += forces.wall_force(self.pos, e, self.walls, p["wall_strength"], p["wall_range"],
+                                 p["wall_interaction_range"], p["fov_deg"], p["out_of_view_weight"])
+        walking_groups = np.where(self.route >= 0, self.group, -1)
+        acc += forces.group_forces(self.pos, self.vel, e, self.radius, walking_groups, p["group_gaze"],
+                                   p["group_coherence"], p["group_repulsion"])
+        if robot_pos is not None:
+            acc += forces.obstacle_disc_force(self.pos, e, robot_pos, robot_radius, p["robot_strength"],
+                                              p["wall_range"], p["fov_deg"], p["out_of_view_weight"])
+        if p["random_force"] > 0:
+            acc += self.rng.normal(0.0, p["random_force"], acc.shape)
+        return acc
 
     # -- contacts -----------------------------------------------------------------------------------------------
 
@@ -338,22 +319,22 @@ class Crowd:
 
     def step(self, dt: float, robot_pos: np.ndarray | None = None, robot_radius: float = 0.0) -> None:
         self._run_sources()
-        n = len(self.pos)
-        if n:
-            e, speed = self.desired_direction()
-            acc = (speed[:, None] * e - self.vel) / self.p["relaxation_time"]
-            acc += self.agent_forces(e) + self.wall_forces(e) + self.group_forces()
-            if robot_pos is not None:
-                acc += self.robot_forces(e, robot_pos, robot_radius)
-            vel = self.vel + acc * dt
+        if len(self.pos):
+            vel = self.vel + self.acceleration(robot_pos, robot_radius) * dt
             vmax = self.p["max_speed_factor"] * self.v0
             s = np.linalg.norm(vel, axis=1)
             vel *= np.minimum(1.0, vmax / np.maximum(s, 1e-9))[:, None]
             before = self.pos.copy()
             self.pos = self.pos + vel * dt
             self._resolve_contacts(robot_pos, robot_radius)
+            # pushes from a dense crowd can carry a body across a thin wall within one step: such a body stays put
+            crossed = segments_cross(before, self.pos, self.walls)
+            self.pos[crossed] = before[crossed]
             self.vel = (self.pos - before) / dt
-            self.walked += np.linalg.norm(self.pos - before, axis=1)
+            speed = np.linalg.norm(self.vel, axis=1)
+            self.walked += speed * dt
+            slow = (self.route >= 0) & (speed < 0.2 * self.v0)
+            self.slow_time = np.where(slow, self.slow_time + dt, 0.0)
         self.t += dt
         self._advance_waypoints()
 

@@ -36,20 +36,24 @@ def inside_polygon(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
     return (crosses & (x < xi)).sum(axis=1) % 2 == 1
 
 
-def line_of_sight(origin: np.ndarray, points: np.ndarray, segs: np.ndarray) -> np.ndarray:
-    """For points [n, 2]: True where the straight line from ``origin`` crosses no segment."""
-    if len(segs) == 0 or len(points) == 0:
-        return np.ones(len(points), bool)
-    d = points - origin  # [n, 2]
+def segments_cross(starts: np.ndarray, ends: np.ndarray, segs: np.ndarray) -> np.ndarray:
+    """For moves ``starts`` -> ``ends`` [n, 2]: True where the move crosses (or touches) any segment [m, 2, 2]."""
+    if len(segs) == 0 or len(starts) == 0:
+        return np.zeros(len(starts), bool)
+    d = ends - starts  # [n, 2]
     a, e = segs[:, 0], segs[:, 1] - segs[:, 0]  # [m, 2]
 
     def cross(u, v):
         return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
     denom = cross(d[:, None, :], e[None])  # [n, m]
-    oa = a[None] - origin  # [1, m, 2]
+    oa = a[None] - starts[:, None, :]  # [n, m, 2]
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = cross(oa, e[None]) / denom  # along the sight line
+        t = cross(oa, e[None]) / denom  # along the move
         u = cross(oa, d[:, None, :]) / denom  # along the segment
-    blocked = (np.abs(denom) > 1e-12) & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)
-    return ~blocked.any(axis=1)
+    return ((np.abs(denom) > 1e-12) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)).any(axis=1)
+
+
+def line_of_sight(origin: np.ndarray, points: np.ndarray, segs: np.ndarray) -> np.ndarray:
+    """For points [n, 2]: True where the straight line from ``origin`` crosses no segment."""
+    return ~segments_cross(np.broadcast_to(np.asarray(origin, float), points.shape), points, segs)

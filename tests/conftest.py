@@ -9,14 +9,17 @@ LASERS = [{"name": "front_laser", "mount": [0.25, 0, 0]}, {"name": "rear_laser",
 
 
 def room(walls=None, obstacles=None, **extra) -> dict:
-    """A scenario dict: a 40 m x 40 m walled room (unless ``walls`` is given), a parked robot, two lasers."""
+    """A scenario dict: a 40 m x 40 m walled room (unless ``walls`` is given), a parked robot, two lasers, and no
+    random force (the checks are analytic)."""
     data = {
         "name": "test_room",
+        "crowd": {"random_force": 0.0},
         "map": {"walls": walls if walls is not None else [[[0, 0], [40, 0], [40, 40], [0, 40], [0, 0]]],
                 "obstacles": obstacles or []},
         "robot": {"start": [2, 2, 0]},
         "sensors": {"lasers": LASERS},
     }
+    data["crowd"].update(extra.pop("crowd", {}))
     data.update(extra)
     return data
 

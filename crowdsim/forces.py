@@ -1,0 +1,147 @@
+"""The social-force terms, each a pure function on arrays (accelerations in m/s^2), so each can be tested alone.
+
+Agent-agent terms work on directed neighbour pairs (i, j): the force that j exerts on i, summed per i with
+``np.bincount``. Nothing here loops over agents.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from scenarios.geometry import closest_on_segments
+
+
+def _sum_per_agent(i: np.ndarray, fx: np.ndarray, fy: np.ndarray, n: int) -> np.ndarray:
+    return np.stack([np.bincount(i, fx, n), np.bincount(i, fy, n)], axis=1)
+
+
+def desired_force(direction: np.ndarray, speed: np.ndarray, vel: np.ndarray, tau: float) -> np.ndarray:
+    """Relaxation towards the desired velocity: (v0 e - v) / tau (Helbing & Molnar 1995)."""
+    return (speed[:, None] * direction - vel) / tau
+
+
+def moussaid2009(pos: np.ndarray, vel: np.ndarray, i: np.ndarray, j: np.ndarray, strength: float,
+                 lam: float, gamma: float, n: float, n_prime: float, walking: np.ndarray | None = None) -> np.ndarray:
+    """Moussaid, Helbing et al. 2009 (Proc. R. Soc. B 276) agent interaction, the form PedSim uses.
+
+    With e the unit vector from i to j and d their distance, the interaction vector D = lam (v_i - v_j) + e
+    points along t = D / |D|; B = gamma |D|; theta is the signed angle from t to e. The force decelerates i along t
+    and turns it away from j's side:
+        f = -A exp(-d / B) [exp(-(n' B theta)^2) t + K exp(-(n B theta)^2) n_left],  K = sign(theta).
+    At theta = 0 (a perfectly symmetric head-on meeting) there is no turning term, as in the paper
+    (K = theta / |theta|); the random force breaks such ties. The turning term steers walkers round each other, so
+    agents not ``walking`` (standing people) feel only the braking term, else they would circle each other.
+    """
+    count = len(pos)
+    dx, dy = pos[j, 0] - pos[i, 0], pos[j, 1] - pos[i, 1]
+    d = np.maximum(np.sqrt(dx * dx + dy * dy), 1e-9)
+    ex, ey = dx / d, dy / d
+    Dx = lam * (vel[i, 0] - vel[j, 0]) + ex
+    Dy = lam * (vel[i, 1] - vel[j, 1]) + ey
+    nD = np.maximum(np.sqrt(Dx * Dx + Dy * Dy), 1e-9)
+    tx, ty = Dx / nD, Dy / nD
+    theta = np.arctan2(tx * ey - ty * ex, tx * ex + ty * ey)
+    sign = np.sign(theta) if walking is None else np.sign(theta) * walking[i]
+    B = gamma * nD
+    base = -strength * np.exp(-d / B)
+    along = base * np.exp(-(n_prime * B * theta) ** 2)
+    side = base * sign * np.exp(-(n * B * theta) ** 2)
+    fx = along * tx + side * -ty
+    fy = along * ty + side * tx
+    return _sum_per_agent(i, fx, fy, count)
+
+
+def in_view_weight(direction: np.ndarray, force: np.ndarray, fov_deg: float, out_of_view: float) -> np.ndarray:
+    """Helbing & Molnar 1995 anisotropy: weight 1 when the force's source lies within the field of view (a force
+    pointing against the walking direction), ``out_of_view`` (c) otherwise."""
+    norm = np.linalg.norm(force, axis=-1)
+    seen = np.einsum("...k,...k->...", direction, -force) >= norm * np.cos(np.radians(fov_deg) / 2)
+    return np.where(seen, 1.0, out_of_view)
+
+
+def helbing_molnar1995(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, i: np.ndarray, j: np.ndarray,
+                       strength: float, sigma: float, step_time: float, fov_deg: float,
+                       out_of_view: float) -> np.ndarray:
+    """Helbing & Molnar 1995 elliptical repulsion V(b) = V0 exp(-b / sigma), with
+    2b = sqrt((|r| + |r - s e_j|)^2 - s^2), s = |v_j| step_time, and the field-of-view weighting."""
+    count = len(pos)
+    rx, ry = pos[i, 0] - pos[j, 0], pos[i, 1] - pos[j, 1]
+    vx, vy = vel[j, 0], vel[j, 1]
+    step = np.sqrt(vx * vx + vy * vy) * step_time
+    yx, yy = rx - step_time * vx, ry - step_time * vy  # r - s e_j
+    nr = np.maximum(np.sqrt(rx * rx + ry * ry), 1e-6)
+    ny = np.maximum(np.sqrt(yx * yx + yy * yy), 1e-6)
+    b = 0.5 * np.sqrt(np.maximum((nr + ny) ** 2 - step**2, 0.0))
+    b = np.maximum(b, 0.05)  # keeps the gradient finite when i stands exactly in j's path
+    mag = strength / sigma * np.exp(-b / sigma) * (nr + ny) / (4 * b)
+    fx = mag * (rx / nr + yx / ny)
+    fy = mag * (ry / nr + yy / ny)
+    w = in_view_weight(direction[i], np.stack([fx, fy], 1), fov_deg, out_of_view)
+    return _sum_per_agent(i, w * fx, w * fy, count)
+
+
+def wall_force(pos: np.ndarray, direction: np.ndarray, walls: np.ndarray, strength: float, length: float,
+               reach: float, fov_deg: float, out_of_view: float) -> np.ndarray:
+    """Helbing & Molnar 1995 wall repulsion U0/R exp(-d/R) from every segment nearer than ``reach``, summed."""
+    if len(walls) == 0 or len(pos) == 0:
+        return np.zeros_like(pos)
+    away, dist = closest_on_segments(pos, walls)
+    mag = np.where(dist < reach, strength / length * np.exp(-dist / length), 0.0)
+    f = mag[..., None] * away / np.maximum(dist, 1e-9)[..., None]
+    f *= in_view_weight(direction[:, None, :], f, fov_deg, out_of_view)[..., None]
+    return f.sum(axis=1)
+
+
+def obstacle_disc_force(pos: np.ndarray, direction: np.ndarray, centre: np.ndarray, radius: float,
+                        strength: float, length: float, fov_deg: float, out_of_view: float) -> np.ndarray:
+    """Repulsion from a disc (the robot): U/R exp(-gap/R) with gap the distance to its rim."""
+    away = pos - centre
+    dist = np.maximum(np.linalg.norm(away, axis=1), 1e-9)
+    gap = np.maximum(dist - radius, 0.0)
+    f = (strength / length * np.exp(-gap / length))[:, None] * away / dist[:, None]
+    return f * in_view_weight(direction, f, fov_deg, out_of_view)[:, None]
+
+
+def group_forces(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, radius: np.ndarray, group: np.ndarray,
+                 gaze: float, coherence: float, repulsion: float, vision_deg: float = 90.0,
+                 margin: float = 0.3) -> np.ndarray:
+    """Moussaid et al. 2010 (PLoS ONE 5(4) e10047) group terms for members of ``group`` >= 0.
+
+    gaze: -beta1 alpha v, alpha the head rotation needed to keep the other members' centre in view (vision
+    half-angle ``vision_deg``); coherence: beta2 towards the group's centre once farther than (N - 1) / 2 m;
+    repulsion: beta3 away from each member nearer than the two radii plus ``margin``.
+    """
+    f = np.zeros_like(pos)
+    idx = np.flatnonzero(group >= 0)
+    if len(idx) < 2:
+        return f
+    _, g, size = np.unique(group[idx], return_inverse=True, return_counts=True)
+    size_i = size[g]
+    total = np.stack([np.bincount(g, pos[idx, 0]), np.bincount(g, pos[idx, 1])], 1)
+    centroid = total[g] / size_i[:, None]
+    others = (total[g] - pos[idx]) / np.maximum(size_i - 1, 1)[:, None]  # centre of the other members
+    # coherence
+    to_c = centroid - pos[idx]
+    dist_c = np.linalg.norm(to_c, axis=1)
+    pull = (size_i > 1) & (dist_c > (size_i - 1) / 2)
+    f[idx[pull]] += coherence * to_c[pull] / dist_c[pull, None]
+    # gaze
+    to_o = others - pos[idx]
+    heading = direction[idx]
+    cosang = np.einsum("ij,ij->i", heading, to_o) / np.maximum(np.linalg.norm(to_o, axis=1), 1e-9)
+    alpha = np.maximum(np.arccos(np.clip(cosang, -1, 1)) - np.radians(vision_deg), 0.0)
+    f[idx] += -gaze * alpha[:, None] * vel[idx] * (size_i > 1)[:, None]
+    # repulsion between members: pairs within a group, found by comparing members k places apart in group order
+    order = np.argsort(g, kind="stable")
+    a_list, b_list = [], []
+    for k in range(1, int(size.max())):
+        same = g[order[:-k]] == g[order[k:]]
+        a_list += [order[:-k][same], order[k:][same]]
+        b_list += [order[k:][same], order[:-k][same]]
+    a, b = np.concatenate(a_list), np.concatenate(b_list)
+    d = pos[idx[a]] - pos[idx[b]]
+    dist = np.maximum(np.linalg.norm(d, axis=1), 1e-9)
+    near = dist < radius[idx[a]] + radius[idx[b]] + margin
+    push = repulsion * d[near] / dist[near, None]
+    np.add.at(f, idx[a[near]], push)
+    return f
