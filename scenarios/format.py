@@ -62,9 +62,25 @@ WAYPOINT = Schema({
     "radius": F("float", 1.0, min=0.0, exclusive_min=True, doc="m, reached when nearer than this"),
 })
 
+QUEUE = Schema({
+    "position": F("point", required=True, doc="m, the service point: the head of the line"),
+    "direction_deg": F("float", 0.0, doc="deg, direction in which the line grows from the service point (PedSim)"),
+    "spacing": F("float", 0.7, min=0.3, doc="m, distance between people in line"),
+    "service_time": F("float", 5.0, min=0.0, doc="s, mean of the exponential service time at the head"),
+})
+
+CLUSTER = Schema({
+    "position": F("point", required=True, doc="m, centre of the area the persons start in (PedSim <agent>)"),
+    "count": F("int", 1, min=1, doc="persons"),
+    "spread": F("point", [0.0, 0.0], doc="m, width and height of the start area (PedSim dx, dy)"),
+    "route": F("str", required=True, doc="the route they follow from the start"),
+    "agent_type": F("str", "adult", doc="agent type of the persons"),
+})
+
 ROUTE = Schema({
-    "waypoints": F(ListOf(F("str"), min_items=1), required=True, doc="waypoint names, visited in order"),
-    "sink": F("bool", True, doc="persons leave the simulation at the last waypoint"),
+    "waypoints": F(ListOf(F("str"), min_items=1), required=True,
+                   doc="stages visited in order: waypoint or queue names"),
+    "sink": F("bool", True, doc="persons leave the simulation at the last stage; false: they start over"),
 })
 
 SOURCE = Schema({
@@ -154,9 +170,11 @@ SCENARIO = Schema({
     "map": F(MAP),
     "crowd": F(CROWD),
     "waypoints": F(MapOf(F(WAYPOINT)), {}),
+    "queues": F(MapOf(F(QUEUE)), {}),
     "routes": F(MapOf(F(ROUTE)), {}),
     "sources": F(ListOf(F(SOURCE)), []),
     "standing": F(ListOf(F(STANDING)), []),
+    "clusters": F(ListOf(F(CLUSTER)), [], doc="persons present from the start, on a route"),
     "robot": F(ROBOT, required=True),
     "sensors": F(Schema({"lasers": F(ListOf(F(LASER), min_items=1), required=True)}), required=True),
     "pipeline": F(PIPELINE),

@@ -82,14 +82,24 @@ def check_geometry(scenario: dict, source: str) -> None:
                                     f"unknown agent type; expected one of: {known}")
         if sum(src["agent_types"].values()) <= 0:
             raise ScenarioError(source, f"sources[{i}].agent_types", "expected at least one positive weight")
-    for i, g in enumerate(scenario["standing"]):
-        if g["agent_type"] not in types:
-            raise ScenarioError(source, f"standing[{i}].agent_type", f"unknown agent type; expected one of: {known}")
+    for key in ("standing", "clusters"):
+        for i, g in enumerate(scenario[key]):
+            if g["agent_type"] not in types:
+                raise ScenarioError(source, f"{key}[{i}].agent_type", f"unknown agent type; expected one of: {known}")
+    clash = set(scenario["waypoints"]) & set(scenario["queues"])
+    if clash:
+        name = sorted(clash)[0]
+        raise ScenarioError(source, f"queues.{name}", "a waypoint has the same name; expected unique stage names")
+    stages = list(scenario["waypoints"]) + list(scenario["queues"])
     for name, route in scenario["routes"].items():
         for i, wp in enumerate(route["waypoints"]):
-            if wp not in scenario["waypoints"]:
+            if wp not in stages:
                 raise ScenarioError(source, f"routes.{name}.waypoints[{i}]",
-                                    f"unknown waypoint {wp!r}; expected one of: {', '.join(scenario['waypoints'])}")
+                                    f"unknown stage {wp!r}; expected a waypoint or queue: {', '.join(stages)}")
+    for i, c in enumerate(scenario["clusters"]):
+        if c["route"] not in scenario["routes"]:
+            raise ScenarioError(source, f"clusters[{i}].route",
+                                f"unknown route {c['route']!r}; expected one of: {', '.join(scenario['routes'])}")
     for i, src in enumerate(scenario["sources"]):
         for r in src["routes"]:
             if r not in scenario["routes"]:
@@ -102,6 +112,7 @@ def check_geometry(scenario: dict, source: str) -> None:
     segs = wall_segments(scenario)
     radius = max(t["radius"] for t in types.values()) if types else 0.25
     places = [(f"waypoints.{n}.position", w["position"], "goal") for n, w in scenario["waypoints"].items()]
+    places += [(f"queues.{n}.position", q["position"], "queue") for n, q in scenario["queues"].items()]
     places += [(f"sources[{i}].position", s["position"], "source") for i, s in enumerate(scenario["sources"])]
     places += [(f"standing[{i}].position", s["position"], "standing place") for i, s in enumerate(scenario["standing"])]
     places += [("robot.start", scenario["robot"]["start"][:2], "robot start")]

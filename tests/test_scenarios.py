@@ -203,7 +203,7 @@ def test_route_with_unknown_waypoint(tmp_path):
     data = base()
     data["routes"]["r"]["waypoints"] = ["a", "nowhere"]
     path = write(tmp_path, data)
-    expect_error(path, "routes.r.waypoints[1]", "unknown waypoint 'nowhere'", "expected one of: a, b")
+    expect_error(path, "routes.r.waypoints[1]", "unknown stage 'nowhere'", "expected a waypoint or queue: a, b")
 
 
 def test_source_with_unknown_route(tmp_path):
