@@ -65,19 +65,33 @@ class Crowd:
                                     for t in types.values()]).reshape(-1, 4)
         self.type_radius = np.array([t["radius"] for t in types.values()])
         names = self.route_names = list(scenario["routes"])
-        wps = scenario["waypoints"]
+        wps, queues = scenario["waypoints"], scenario["queues"]
+        queue_names = list(queues)
         length = max((len(r["waypoints"]) for r in scenario["routes"].values()), default=1)
-        self.route_goal = np.zeros((max(len(names), 1), length, 2))
-        self.route_radius = np.ones((max(len(names), 1), length))
-        self.route_len = np.zeros(max(len(names), 1), np.int64)
-        self.route_sink = np.zeros(max(len(names), 1), bool)
+        shape = (max(len(names), 1), length)
+        self.route_goal = np.zeros(shape + (2,))
+        self.route_radius = np.ones(shape)
+        self.route_queue = np.full(shape, -1, np.int64)  # the queue a stage is, -1 for a waypoint
+        self.route_len = np.zeros(shape[0], np.int64)
+        self.route_sink = np.zeros(shape[0], bool)
         for k, name in enumerate(names):
             route = scenario["routes"][name]
-            for i, wp in enumerate(route["waypoints"]):
-                self.route_goal[k, i] = wps[wp]["position"]
-                self.route_radius[k, i] = wps[wp]["radius"]
+            for i, stage in enumerate(route["waypoints"]):
+                if stage in queues:
+                    self.route_goal[k, i] = queues[stage]["position"]
+                    self.route_queue[k, i] = queue_names.index(stage)
+                else:
+                    self.route_goal[k, i] = wps[stage]["position"]
+                    self.route_radius[k, i] = wps[stage]["radius"]
             self.route_len[k] = len(route["waypoints"])
             self.route_sink[k] = route["sink"]
+        self.queue_head = np.array([q["position"] for q in queues.values()], float).reshape(-1, 2)
+        angle = np.radians([q["direction_deg"] for q in queues.values()])
+        self.queue_dir = np.stack([np.cos(angle), np.sin(angle)], 1).reshape(-1, 2)
+        self.queue_spacing = np.array([q["spacing"] for q in queues.values()], float)
+        self.queue_service = np.array([q["service_time"] for q in queues.values()], float)
+        self.queue_members: list[list[int]] = [[] for _ in queues]  # ids in line, head first
+        self.queue_service_end = np.full(len(queues), np.nan)
         self.sources = []
         for s in scenario["sources"]:
             weights = np.array(list(s["routes"].values()), float)
@@ -105,9 +119,16 @@ class Crowd:
         self.goal_radius = np.zeros(n)
         self.walked = np.zeros(n)
         self.slow_time = np.zeros(n)  # s spent walking at under a fifth of the desired speed
+        self.queued = np.zeros(n, np.int64)  # the queue a person stands in, -1 for none
         for g in scenario["standing"]:
             self._add_standing(np.array(g["position"], float), g["count"], g["spacing"],
                                self.type_names.index(g["agent_type"]))
+        for c in scenario["clusters"]:
+            kind = np.full(c["count"], self.type_names.index(c["agent_type"]))
+            pos = np.asarray(c["position"]) + self.rng.uniform(-0.5, 0.5, (c["count"], 2)) * c["spread"]
+            k = self.route_names.index(c["route"])
+            self._append(pos, self._desired_speeds(kind), kind, -1, k, np.repeat(self.route_goal[k, :1], c["count"], 0),
+                         np.full(c["count"], self.route_radius[k, 0]))
 
     # -- population ---------------------------------------------------------------------------------------------
 
@@ -135,6 +156,7 @@ class Crowd:
         self.goal_radius = np.concatenate([self.goal_radius, goal_radius])
         self.walked = np.concatenate([self.walked, np.zeros(n)])
         self.slow_time = np.concatenate([self.slow_time, np.zeros(n)])
+        self.queued = np.concatenate([self.queued, np.full(n, -1, np.int64)])
 
     def add_walkers(self, positions: np.ndarray, route: str, desired_speed: float | None = None,
                     group: bool = False, agent_type: str = "adult") -> np.ndarray:
@@ -198,17 +220,66 @@ class Crowd:
 
     def _remove(self, keep: np.ndarray):
         for name in ("id", "pos", "vel", "v0", "kind", "radius", "group", "route", "wp", "goal", "goal_radius", "walked",
-                     "slow_time"):
+                     "slow_time", "queued"):
             setattr(self, name, getattr(self, name)[keep])
 
-    def _advance_waypoints(self):
-        walking = self.route >= 0
-        reached = walking & (np.linalg.norm(self.goal - self.pos, axis=1) < self.goal_radius)
+    @property
+    def holding(self) -> np.ndarray:
+        """Persons who hold a spot rather than walk: standing people and people in a queue."""
+        return (self.route < 0) | (self.queued >= 0)
+
+    def _run_queues(self) -> np.ndarray:
+        """Line people up at their queue stages (PedSim's waiting queues); return who finished being served.
+
+        A person whose stage is a queue heads for the tail and joins it on arrival; people in line hold their
+        slots, spacing apart from the service point along the queue's direction; the head is served for an
+        exponential time and then walks on, and everyone behind moves up a slot.
+        """
+        served = np.zeros(len(self.id), bool)
+        if not len(self.queue_members):
+            return served
+        r = np.maximum(self.route, 0)
+        stage_queue = np.where(self.route >= 0, self.route_queue[r, np.minimum(self.wp, self.route_len[r] - 1)], -1)
+        for q, members in enumerate(self.queue_members):
+            head = self.queue_head[q]
+            step = self.queue_spacing[q] * self.queue_dir[q]
+            if members:
+                h = int(np.searchsorted(self.id, members[0]))
+                if np.isnan(self.queue_service_end[q]):
+                    if np.linalg.norm(self.pos[h] - head) < 0.5:
+                        self.queue_service_end[q] = self.t + self.rng.exponential(self.queue_service[q])
+                elif self.t >= self.queue_service_end[q]:
+                    served[h] = True
+                    self.queued[h] = -1
+                    members.pop(0)
+                    self.queue_service_end[q] = np.nan
+            arriving = np.flatnonzero((stage_queue == q) & (self.queued < 0) & ~served)
+            if len(arriving):
+                tail = head + len(members) * step
+                dist = np.linalg.norm(self.pos[arriving] - tail, axis=1)
+                order = np.argsort(dist, kind="stable")
+                for a in arriving[order][dist[order] < 1.0]:  # the few at the tail this step, nearest first
+                    members.append(int(self.id[a]))
+                    self.queued[a] = q
+                still = arriving[self.queued[arriving] < 0]
+                self.goal[still] = head + len(members) * step
+                self.goal_radius[still] = 1.0
+            if members:
+                idx = np.searchsorted(self.id, members)
+                self.goal[idx] = head + np.arange(len(members))[:, None] * step
+        return served
+
+    def _advance_stages(self):
+        served = self._run_queues()
+        r = np.maximum(self.route, 0)
+        at_waypoint = (self.route >= 0) & (self.route_queue[r, np.minimum(self.wp, self.route_len[r] - 1)] < 0)
+        reached = at_waypoint & (np.linalg.norm(self.goal - self.pos, axis=1) < self.goal_radius)
+        reached |= served
         if not reached.any():
             return
         self.wp[reached] += 1
-        done = reached & (self.wp >= self.route_len[np.maximum(self.route, 0)])
-        sink = done & self.route_sink[np.maximum(self.route, 0)]
+        done = reached & (self.wp >= self.route_len[r])
+        sink = done & self.route_sink[r]
         self.wp[done & ~sink] = 0
         idx = np.flatnonzero(reached & ~sink)
         self.goal[idx] = self.route_goal[self.route[idx], self.wp[idx]]
@@ -227,7 +298,7 @@ class Crowd:
         to_goal = self.goal - self.pos
         dist = np.linalg.norm(to_goal, axis=1)
         e = to_goal / np.maximum(dist, 1e-9)[:, None]
-        speed = np.where(self.route >= 0, self.v0, self.v0 * np.clip(dist / ARRIVAL_RADIUS, 0.0, 1.0))
+        speed = np.where(self.holding, self.v0 * np.clip(dist / ARRIVAL_RADIUS, 0.0, 1.0), self.v0)
         stuck = np.flatnonzero(self.slow_time >= self.p["stuck_time"])
         if len(stuck) and len(self.walls):
             away, d = closest_on_segments(self.pos[stuck], self.walls)
@@ -252,7 +323,7 @@ class Crowd:
         if p["interaction"] == "moussaid2009":
             return forces.moussaid2009(self.pos, self.vel, i, j, p["moussaid_strength"], p["moussaid_lambda"],
                                        p["moussaid_gamma"], p["moussaid_n"], p["moussaid_n_prime"],
-                                       walking=self.route >= 0)
+                                       walking=~self.holding)
         return forces.helbing_molnar1995(self.pos, self.vel, e, i, j, p["agent_strength"], p["agent_range"],
                                          p["step_time"], p["fov_deg"], p["out_of_view_weight"])
 
@@ -264,7 +335,7 @@ class Crowd:
         acc += self.interaction_forces(e)
         acc += forces.wall_force(self.pos, e, self.walls, p["wall_strength"], p["wall_range"],
                                  p["wall_interaction_range"], p["fov_deg"], p["out_of_view_weight"])
-        walking_groups = np.where(self.route >= 0, self.group, -1)
+        walking_groups = np.where(self.holding, -1, self.group)
         acc += forces.group_forces(self.pos, self.vel, e, self.radius, walking_groups, p["group_gaze"],
                                    p["group_coherence"], p["group_repulsion"])
         if robot_pos is not None:
@@ -333,10 +404,10 @@ class Crowd:
             self.vel = (self.pos - before) / dt
             speed = np.linalg.norm(self.vel, axis=1)
             self.walked += speed * dt
-            slow = (self.route >= 0) & (speed < 0.2 * self.v0)
+            slow = ~self.holding & (speed < 0.2 * self.v0)
             self.slow_time = np.where(slow, self.slow_time + dt, 0.0)
         self.t += dt
-        self._advance_waypoints()
+        self._advance_stages()
 
     def states(self) -> AgentStates:
         return AgentStates(self.t, self.id.copy(), self.pos.copy(), self.vel.copy(), self.goal.copy(),

@@ -139,3 +139,39 @@ def test_same_seed_same_crowd(make_scenario):
     assert np.array_equal(runs[0].id, runs[1].id)
     assert np.array_equal(runs[0].position, runs[1].position)
     assert np.array_equal(runs[0].group_id, runs[1].group_id)
+
+
+def queue_room(make_scenario, service_time):
+    return make_scenario(
+        waypoints={"exit": {"position": [20, 5], "radius": 0.5}},
+        queues={"desk": {"position": [20, 20], "direction_deg": 0.0, "spacing": 0.7, "service_time": service_time}},
+        routes={"r": {"waypoints": ["desk", "exit"]}})
+
+
+def test_queue_lines_people_up_behind_the_service_point(make_scenario):
+    # the line grows along +x from the desk at (20, 20): slot k is at (20 + 0.7 k, 20)
+    crowd = Crowd(queue_room(make_scenario, service_time=1e6), np.random.default_rng(8))
+    ids = crowd.add_walkers(np.stack([np.full(5, 30.0), np.linspace(16, 24, 5)], 1), "r", desired_speed=1.2)
+    for _ in range(int(40 / DT)):
+        crowd.step(DT)
+    line = crowd.queue_members[0]
+    assert sorted(line) == sorted(ids.tolist())
+    idx = np.searchsorted(crowd.id, line)
+    slots = np.stack([20 + 0.7 * np.arange(5), np.full(5, 20.0)], 1)
+    assert np.abs(crowd.pos[idx] - slots).max() < 0.15
+    assert len(crowd.id) == 5  # nobody served yet: the service takes "forever"
+
+
+def test_queue_serves_first_come_first_served(make_scenario):
+    crowd = Crowd(queue_room(make_scenario, service_time=2.0), np.random.default_rng(9))
+    crowd.add_walkers(np.stack([np.full(4, 30.0), np.linspace(17, 23, 4)], 1), "r", desired_speed=1.2)
+    joined, left, alive = [], [], set(crowd.id.tolist())
+    for _ in range(int(120 / DT)):
+        crowd.step(DT)
+        joined += [i for i in crowd.queue_members[0] if i not in joined]
+        now = set(crowd.id.tolist())
+        left += sorted(alive - now)
+        alive = now
+    assert len(joined) == 4 and len(crowd.id) == 0
+    # served in the order they joined; they walk the same 15 m to the exit, so they also leave in that order
+    assert left == joined
