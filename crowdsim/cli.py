@@ -1,4 +1,4 @@
-"""The ``crowdsim`` command: run, scenarios, bench."""
+"""The ``crowdsim`` command: run, scenarios, validate-scenario, bench."""
 
 from __future__ import annotations
 
@@ -32,6 +32,18 @@ def _cmd_scenarios(args) -> int:
     return 0
 
 
+def _cmd_validate_scenario(args) -> int:
+    from scenarios import load_scenario
+
+    sc = load_scenario(args.file)
+    counts = {k: len(sc[k]) for k in ("waypoints", "queues", "routes", "sources", "clusters", "standing")}
+    walls = sum(len(w) - 1 for w in sc["map"]["walls"]) + sum(len(o) for o in sc["map"]["obstacles"])
+    print(f"{args.file}: valid scenario {sc['name']!r}: {walls} wall segments, "
+          + ", ".join(f"{n} {k}" for k, n in counts.items())
+          + f", {len(sc['sensors']['lasers'])} laser(s); seed {sc['seed']}, {sc['duration']:g} s")
+    return 0
+
+
 def _cmd_bench(args) -> int:
     from .bench import run_benchmarks
 
@@ -52,6 +64,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_run)
     p = sub.add_parser("scenarios", help="list the bundled scenarios")
     p.set_defaults(func=_cmd_scenarios)
+    p = sub.add_parser("validate-scenario", help="check a scenario file and say what it holds")
+    p.add_argument("file", help="a YAML scenario (or a bundled name)")
+    p.set_defaults(func=_cmd_validate_scenario)
     p = sub.add_parser("bench", help="measure the crowd, the lasers, the tracker and the whole loop")
     p.add_argument("--json", help="also write the figures to this JSON file")
     p.add_argument("--quick", action="store_true", help="shorter measurements (for a smoke test)")

@@ -55,20 +55,26 @@ class Timing:
 class Simulation:
     def __init__(self, scenario: dict):
         self.scenario = scenario
-        streams = np.random.SeedSequence(scenario["seed"]).spawn(3 + len(scenario["sensors"]["lasers"]))
+        self.walls = wall_segments(scenario)
+        self.scene = Scene(self.walls, scenario["robot"]["radius"], scenario["crowd"]["max_agents"])
+        self.max_range = scenario["evaluation"]["max_range"]
+        self.dt = scenario["dt"]
+        self.reset()
+
+    def reset(self, seed: int | None = None) -> None:
+        """Start over (the scenario's seed unless ``seed`` is given): a new crowd with ids from 1, a robot at its
+        start, fresh detectors, tracker and scores. The MuJoCo scene is kept; nothing else carries over."""
+        scenario = self.scenario
+        self.seed = scenario["seed"] if seed is None else int(seed)
+        streams = np.random.SeedSequence(self.seed).spawn(3 + len(scenario["sensors"]["lasers"]))
         rngs = [np.random.default_rng(s) for s in streams]
         self.crowd = Crowd(scenario, rngs[0])
         self.robot = Robot(scenario["robot"], rngs[1])
-        self.walls = wall_segments(scenario)
-        self.scene = Scene(self.walls, scenario["robot"]["radius"], scenario["crowd"]["max_agents"])
         self.lasers = [Laser(p, self.scene, rngs[3 + k]) for k, p in enumerate(scenario["sensors"]["lasers"])]
         pipe = scenario["pipeline"]
         self.detectors = [SegmentDetector(pipe["detector"]) for _ in self.lasers]
         self.tracker = NearestNeighbourTracker(TrackerParams(**pipe["tracker"]), frame=TRACKING_FRAME)
-        ev = scenario["evaluation"]
-        self.clearmot = ClearMot(ev["threshold"])
-        self.max_range = ev["max_range"]
-        self.dt = scenario["dt"]
+        self.clearmot = ClearMot(scenario["evaluation"]["threshold"])
         self.timing = Timing()
         self._next_scan = np.zeros(len(self.lasers))
         self._fused_ids = 0
