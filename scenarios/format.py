@@ -160,6 +160,8 @@ MAP = Schema({
     "obstacles": F(ListOf(F("points")), [], doc="closed polygons (columns, counters), m"),
 })
 
+# A file may start with ``base: NAME_OR_PATH``: the base scenario's data, with this file's keys laid over it
+# (mappings merge key by key, lists and values are replaced), before validation. See scenarios.loader.read_raw.
 SCENARIO = Schema({
     "name": F("str", required=True),
     "description": F("str", ""),

@@ -38,9 +38,16 @@ def resolve(name_or_path: str) -> Path:
     raise ScenarioError(name_or_path, "<scenario>", f"not a bundled scenario nor a YAML file; bundled: {names}")
 
 
-def load_scenario(name_or_path: str, **overrides) -> dict:
-    """The validated scenario as plain data, defaults filled in; ``overrides`` replace top-level keys."""
-    path = resolve(name_or_path)
+def merge(base: dict, changes: dict) -> dict:
+    """``base`` with ``changes`` laid over it: mappings merge key by key, anything else is replaced."""
+    out = dict(base)
+    for key, value in changes.items():
+        out[key] = merge(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) else value
+    return out
+
+
+def read_raw(path: Path, seen: tuple = ()) -> dict:
+    """The file's data, with ``base: NAME_OR_PATH`` resolved: the base scenario's data, then this file's over it."""
     source = str(path)
     try:
         with open(path, encoding="utf-8") as f:
@@ -54,8 +61,24 @@ def load_scenario(name_or_path: str, **overrides) -> dict:
         raise ScenarioError(source, "<file>", f"cannot be read as UTF-8 text: {e}") from None
     if not isinstance(raw, dict):
         raise ScenarioError(source, "<top level>", "expected a mapping of keys")
+    if "base" in raw:
+        name = raw.pop("base")
+        if not isinstance(name, str):
+            raise ScenarioError(source, "base", f"expected a scenario name or path, got {name!r}")
+        local = path.parent / name
+        base_path = resolve(str(local) if local.suffix in (".yaml", ".yml") and local.is_file() else name)
+        if base_path.resolve() in seen:
+            raise ScenarioError(source, "base", f"{name!r} leads back to this file; expected no cycle")
+        raw = merge(read_raw(base_path, seen + (path.resolve(),)), raw)
+    return raw
+
+
+def load_scenario(name_or_path: str, **overrides) -> dict:
+    """The validated scenario as plain data, defaults filled in; ``overrides`` replace top-level keys."""
+    path = resolve(name_or_path)
+    raw = read_raw(path)
     raw.update({k: v for k, v in overrides.items() if v is not None})
-    return scenario_from_dict(raw, source)
+    return scenario_from_dict(raw, str(path))
 
 
 def scenario_from_dict(raw: dict, source: str = "<scenario>") -> dict:

@@ -395,3 +395,17 @@ def test_unreadable_file_is_one_error(tmp_path):
     path = tmp_path / "binary.yaml"
     path.write_bytes(b"name: x\n\xff\xfe: 1\n")
     expect_error(path, "<file>", "UTF-8")
+
+
+def test_base_scenario_is_laid_under(tmp_path):
+    quiet = load_scenario("airport_disembarkation_quiet")
+    full = load_scenario("airport_disembarkation")
+    assert quiet["sources"][0]["rate"] == 1.0 and full["sources"][0]["rate"] == 2.0
+    assert quiet["map"] == full["map"] and quiet["routes"] == full["routes"]  # inherited
+    assert len(quiet["standing"]) < len(full["standing"])  # a list is replaced, not merged
+    child = write(tmp_path, {"base": "airport_disembarkation", "name": "mine", "crowd": {"max_agents": 50}},
+                  "mine.yaml")
+    sc = load_scenario(str(child))
+    assert sc["crowd"]["max_agents"] == 50 and sc["crowd"]["agent_types"] == full["crowd"]["agent_types"]
+    loop = write(tmp_path, {"base": "loop.yaml", "name": "loop"}, "loop.yaml")
+    expect_error(loop, "base", "leads back to this file")
