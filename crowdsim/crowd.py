@@ -1,8 +1,8 @@
 """The pedestrian crowd: a vectorized social-force model (Helbing & Molnar 1995) with sources, routes and sinks.
 
 Every per-step computation works on arrays over agents or over neighbour pairs found with a k-d tree, so a step
-costs O(N log N), not O(N^2). Social forces steer; a position-based contact pass afterwards keeps bodies out of
-walls and (almost) out of each other, which the force model alone does not guarantee.
+costs O(N log N), not O(N^2). Social forces steer; pymunk then moves the bodies and resolves their contacts (the
+force model alone does not keep bodies apart), and a last geometric pass keeps every body out of the walls.
 """
 
 from __future__ import annotations
@@ -15,8 +15,9 @@ from scipy.spatial import cKDTree
 from scenarios.geometry import closest_on_segments, segments_cross, wall_segments
 
 from . import forces
+from .contacts import ContactSolver
 
-CONTACT_ITERATIONS = 4
+WALL_PASSES = 4  # push-out passes; two walls of a corner may each need one
 ARRIVAL_RADIUS = 0.3  # m: standing people slow down within this distance of their spot, and return to it when pushed
 
 
@@ -57,6 +58,8 @@ class Crowd:
         self.rng = rng
         self.t = 0.0
         self.walls = wall_segments(scenario)
+        self.contacts = ContactSolver(self.walls, scenario["robot"]["radius"])
+        self._robot_pos: np.ndarray | None = None
         self._next_id = 1
         self._next_group = 1
         types = self.p["agent_types"]
@@ -142,6 +145,7 @@ class Crowd:
 
     def _append(self, pos, v0, kind, group, route, goal, goal_radius):
         n = len(pos)
+        self.contacts.add(self.type_radius[kind])
         self.id = np.concatenate([self.id, np.arange(self._next_id, self._next_id + n)])
         self._next_id += n
         self.pos = np.concatenate([self.pos, pos])
@@ -195,9 +199,15 @@ class Crowd:
         r = self.type_radius[kind]
         centre = src.position + self.rng.uniform(-0.5, 0.5, 2) * np.maximum(src.size - 2 * r.max(), 0)
         heading = self.route_goal[route, 0] - centre
-        side = np.array([-heading[1], heading[0]]) / max(np.linalg.norm(heading), 1e-9)
+        heading /= max(np.linalg.norm(heading), 1e-9)
         offsets = (np.arange(size) - (size - 1) / 2) * (2 * r.max() + 0.1)
-        pos = centre + offsets[:, None] * side
+        # side by side if the walls leave room, else one behind the other, else wait
+        for axis in (np.array([-heading[1], heading[0]]), heading):
+            pos = centre + offsets[:, None] * axis
+            if self._clear_of_walls(centre, pos, r):
+                break
+        else:
+            return False
         if len(self.pos) + size > self.p["max_agents"]:
             return False
         if len(self.pos):
@@ -210,6 +220,14 @@ class Crowd:
                      np.full(size, self.route_radius[route, 0]))
         return True
 
+    def _clear_of_walls(self, centre: np.ndarray, pos: np.ndarray, r: np.ndarray) -> bool:
+        """True when bodies at ``pos`` touch no wall and no wall stands between them and ``centre``."""
+        if len(self.walls) == 0:
+            return True
+        _, dist = closest_on_segments(pos, self.walls)
+        return bool((dist.min(axis=1) >= r + 0.02).all()
+                    and not segments_cross(np.repeat(centre[None], len(pos), 0), pos, self.walls).any())
+
     def _run_sources(self):
         for src in self.sources:
             while src.next_time <= self.t and src.next_time <= src.stop:
@@ -219,6 +237,7 @@ class Crowd:
                 src.next_time += self._interval(src)
 
     def _remove(self, keep: np.ndarray):
+        self.contacts.keep(keep)
         for name in ("id", "pos", "vel", "v0", "kind", "radius", "group", "route", "wp", "goal", "goal_radius", "walked",
                      "slow_time", "queued"):
             setattr(self, name, getattr(self, name)[keep])
@@ -347,35 +366,10 @@ class Crowd:
 
     # -- contacts -----------------------------------------------------------------------------------------------
 
-    def _resolve_contacts(self, robot_pos: np.ndarray | None, robot_radius: float):
-        """Position-based contact pass: separate overlapping bodies, then push everyone out of walls and robot."""
-        pos = self.pos
-        # candidates found once with a margin: bodies move far less than it within the pass
-        pairs = (cKDTree(pos).query_pairs(2 * self.radius.max() + 0.1, output_type="ndarray") if len(pos) > 1
-                 else np.zeros((0, 2), np.int64))
-        for _ in range(CONTACT_ITERATIONS):
-            if len(pairs):
-                i, j = pairs[:, 0], pairs[:, 1]
-                d = pos[i] - pos[j]
-                dist = np.maximum(np.linalg.norm(d, axis=1), 1e-9)
-                overlap = self.radius[i] + self.radius[j] - dist
-                hit = overlap > 0
-                push = (0.5 * overlap[hit] / dist[hit])[:, None] * d[hit]
-                shift = np.zeros_like(pos)
-                np.add.at(shift, i[hit], push)
-                np.add.at(shift, j[hit], -push)
-                pos += shift
-            if robot_pos is not None:
-                away = pos - robot_pos
-                dist = np.maximum(np.linalg.norm(away, axis=1), 1e-9)
-                overlap = np.maximum(robot_radius + self.radius - dist, 0.0)
-                pos += (overlap / dist)[:, None] * away
-            self._push_out_of_walls(pos)
-
     def _push_out_of_walls(self, pos: np.ndarray):
         if len(self.walls) == 0 or len(pos) == 0:
             return
-        for _ in range(CONTACT_ITERATIONS):
+        for _ in range(WALL_PASSES):
             away, dist = closest_on_segments(pos, self.walls)
             depth = self.radius[:, None] - dist
             if not (depth > 0).any():
@@ -396,8 +390,12 @@ class Crowd:
             s = np.linalg.norm(vel, axis=1)
             vel *= np.minimum(1.0, vmax / np.maximum(s, 1e-9))[:, None]
             before = self.pos.copy()
-            self.pos = self.pos + vel * dt
-            self._resolve_contacts(robot_pos, robot_radius)
+            robot_vel = None
+            if robot_pos is not None and self._robot_pos is not None:
+                robot_vel = (robot_pos - self._robot_pos) / dt
+            parked = np.array([1e6, 1e6])  # no robot in this simulation: its disc waits far away
+            self.pos = self.contacts.step(self.pos, vel, dt, parked if robot_pos is None else robot_pos, robot_vel)
+            self._push_out_of_walls(self.pos)  # Chipmunk tolerates a little overlap; walls get none
             # pushes from a dense crowd can carry a body across a thin wall within one step: such a body stays put
             crossed = segments_cross(before, self.pos, self.walls)
             self.pos[crossed] = before[crossed]
@@ -406,6 +404,7 @@ class Crowd:
             self.walked += speed * dt
             slow = ~self.holding & (speed < 0.2 * self.v0)
             self.slow_time = np.where(slow, self.slow_time + dt, 0.0)
+        self._robot_pos = None if robot_pos is None else np.array(robot_pos, float)
         self.t += dt
         self._advance_stages()
 

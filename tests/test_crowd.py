@@ -175,3 +175,19 @@ def test_queue_serves_first_come_first_served(make_scenario):
     assert len(joined) == 4 and len(crowd.id) == 0
     # served in the order they joined; they walk the same 15 m to the exit, so they also leave in that order
     assert left == joined
+
+
+def test_groups_too_wide_for_a_corridor_enter_one_behind_another(make_scenario):
+    # a 2 m corridor (y 19..21): four abreast need 4 x 0.6 = 2.4 m, so each group is emitted in file, inside it
+    walls = [[[0, 0], [40, 0], [40, 40], [0, 40], [0, 0]], [[2, 19], [38, 19]], [[2, 21], [38, 21]]]
+    sc = make_scenario(walls=walls, sources=[{"position": [4, 20], "size": [1, 2], "rate": 1.0, "stop": 20.0,
+                                              "routes": {"r": 1}, "group_size_weights": [0, 0, 0, 1]}],
+                       **one_route((36, 20), radius=0.8))
+    crowd = Crowd(sc, np.random.default_rng(10))
+    emitted = set()
+    for _ in range(int(30 / DT)):
+        crowd.step(DT)
+        emitted.update(crowd.id.tolist())
+        inside = (crowd.pos[:, 0] > 2) & (crowd.pos[:, 0] < 38)
+        assert (np.abs(crowd.pos[inside, 1] - 20) <= 1 - 0.25 + 1e-9).all()
+    assert len(emitted) >= 8  # the groups did get in
