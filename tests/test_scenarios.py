@@ -400,7 +400,7 @@ def test_unreadable_file_is_one_error(tmp_path):
 def test_base_scenario_is_laid_under(tmp_path):
     quiet = load_scenario("airport_disembarkation_quiet")
     full = load_scenario("airport_disembarkation")
-    assert quiet["sources"][0]["rate"] == 1.0 and full["sources"][0]["rate"] == 2.0
+    assert quiet["sources"][0]["rate"] == 1.0 and full["sources"][0]["rate"] == 1.6
     assert quiet["map"] == full["map"] and quiet["routes"] == full["routes"]  # inherited
     assert len(quiet["standing"]) < len(full["standing"])  # a list is replaced, not merged
     child = write(tmp_path, {"base": "airport_disembarkation", "name": "mine", "crowd": {"max_agents": 50}},
