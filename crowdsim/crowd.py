@@ -18,6 +18,7 @@ from . import forces
 from .contacts import ContactSolver
 
 WALL_PASSES = 4  # push-out passes; two walls of a corner may each need one
+ATTRACTION_RATE = 0.05  # 1/s per unit of PedSim's (unitless) attraction strength, while a walker is within reach
 ARRIVAL_RADIUS = 0.3  # m: standing people slow down within this distance of their spot, and return to it when pushed
 
 
@@ -95,6 +96,13 @@ class Crowd:
         self.queue_service = np.array([q["service_time"] for q in queues.values()], float)
         self.queue_members: list[list[int]] = [[] for _ in queues]  # ids in line, head first
         self.queue_service_end = np.full(len(queues), np.nan)
+        attractions = scenario["attractions"].values()
+        centre = np.array([a["position"] for a in attractions], float).reshape(-1, 2)
+        half = np.array([a["size"] for a in attractions], float).reshape(-1, 2) / 2
+        self.attraction_lo, self.attraction_hi = centre - half, centre + half
+        self.attraction_rate = ATTRACTION_RATE * np.array([a["strength"] for a in attractions], float)
+        self.attraction_reach = np.array([a["reach"] for a in attractions], float)
+        self.attraction_time = np.array([a["visit_time"] for a in attractions], float)
         self.sources = []
         for s in scenario["sources"]:
             weights = np.array(list(s["routes"].values()), float)
@@ -123,6 +131,9 @@ class Crowd:
         self.walked = np.zeros(n)
         self.slow_time = np.zeros(n)  # s spent walking at under a fifth of the desired speed
         self.queued = np.zeros(n, np.int64)  # the queue a person stands in, -1 for none
+        self.visiting = np.zeros(n, np.int64)  # the attraction a person is visiting, -1 for none
+        self.visit_end = np.zeros(n)
+        self.visited = np.zeros((n, len(self.attraction_rate)), bool)
         for g in scenario["standing"]:
             self._add_standing(np.array(g["position"], float), g["count"], g["spacing"],
                                self.type_names.index(g["agent_type"]))
@@ -161,6 +172,9 @@ class Crowd:
         self.walked = np.concatenate([self.walked, np.zeros(n)])
         self.slow_time = np.concatenate([self.slow_time, np.zeros(n)])
         self.queued = np.concatenate([self.queued, np.full(n, -1, np.int64)])
+        self.visiting = np.concatenate([self.visiting, np.full(n, -1, np.int64)])
+        self.visit_end = np.concatenate([self.visit_end, np.zeros(n)])
+        self.visited = np.concatenate([self.visited, np.zeros((n, self.visited.shape[1]), bool)])
 
     def add_walkers(self, positions: np.ndarray, route: str, desired_speed: float | None = None,
                     group: bool = False, agent_type: str = "adult") -> np.ndarray:
@@ -239,13 +253,13 @@ class Crowd:
     def _remove(self, keep: np.ndarray):
         self.contacts.keep(keep)
         for name in ("id", "pos", "vel", "v0", "kind", "radius", "group", "route", "wp", "goal", "goal_radius", "walked",
-                     "slow_time", "queued"):
+                     "slow_time", "queued", "visiting", "visit_end", "visited"):
             setattr(self, name, getattr(self, name)[keep])
 
     @property
     def holding(self) -> np.ndarray:
-        """Persons who hold a spot rather than walk: standing people and people in a queue."""
-        return (self.route < 0) | (self.queued >= 0)
+        """Persons who hold a spot rather than walk: standing people, people in a queue or at an attraction."""
+        return (self.route < 0) | (self.queued >= 0) | (self.visiting >= 0)
 
     def _run_queues(self) -> np.ndarray:
         """Line people up at their queue stages (PedSim's waiting queues); return who finished being served.
@@ -288,10 +302,36 @@ class Crowd:
                 self.goal[idx] = head + np.arange(len(members))[:, None] * step
         return served
 
-    def _advance_stages(self):
+    def _run_attractions(self, dt: float) -> None:
+        """PedSim's shopping: a walker passing within reach of an attraction it has not visited is drawn to it at
+        a rate proportional to its strength, lingers there for an exponential time, then takes up its route again."""
+        if not len(self.attraction_rate):
+            return
+        done = np.flatnonzero((self.visiting >= 0) & (self.t >= self.visit_end))
+        self.visiting[done] = -1
+        self.goal[done] = self.route_goal[self.route[done], self.wp[done]]
+        self.goal_radius[done] = self.route_radius[self.route[done], self.wp[done]]
+        free = np.flatnonzero((self.route >= 0) & (self.queued < 0) & (self.visiting < 0))
+        p = self.pos[free, None, :]
+        spot = np.clip(p, self.attraction_lo[None], self.attraction_hi[None])  # nearest point of each area
+        dist = np.linalg.norm(p - spot, axis=2)
+        draw = self.rng.random(dist.shape) < -np.expm1(-self.attraction_rate * dt)
+        drawn = draw & (dist < self.attraction_reach) & ~self.visited[free]
+        who = np.flatnonzero(drawn.any(axis=1))
+        a = np.argmax(drawn[who], axis=1)
+        k = free[who]
+        self.visiting[k] = a
+        self.visited[k, a] = True
+        self.goal[k] = spot[who, a]
+        self.visit_end[k] = (self.t + dist[who, a] / np.maximum(self.v0[k], 0.1)
+                             + self.rng.exponential(self.attraction_time[a]))
+
+    def _advance_stages(self, dt: float):
+        self._run_attractions(dt)
         served = self._run_queues()
         r = np.maximum(self.route, 0)
-        at_waypoint = (self.route >= 0) & (self.route_queue[r, np.minimum(self.wp, self.route_len[r] - 1)] < 0)
+        at_waypoint = ((self.route >= 0) & (self.visiting < 0)
+                       & (self.route_queue[r, np.minimum(self.wp, self.route_len[r] - 1)] < 0))
         reached = at_waypoint & (np.linalg.norm(self.goal - self.pos, axis=1) < self.goal_radius)
         reached |= served
         if not reached.any():
@@ -406,7 +446,7 @@ class Crowd:
             self.slow_time = np.where(slow, self.slow_time + dt, 0.0)
         self._robot_pos = None if robot_pos is None else np.array(robot_pos, float)
         self.t += dt
-        self._advance_stages()
+        self._advance_stages(dt)
 
     def states(self) -> AgentStates:
         return AgentStates(self.t, self.id.copy(), self.pos.copy(), self.vel.copy(), self.goal.copy(),

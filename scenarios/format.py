@@ -69,6 +69,14 @@ QUEUE = Schema({
     "service_time": F("float", 5.0, min=0.0, doc="s, mean of the exponential service time at the head"),
 })
 
+ATTRACTION = Schema({
+    "position": F("point", required=True, doc="m, centre of the attraction's area (a shop, a window)"),
+    "size": F("point", [2.0, 2.0], doc="m, width and height of the area (PedSim width, height)"),
+    "strength": F("float", 1.0, min=0.0, doc="appeal: a passer-by within reach is drawn at strength x 0.05 /s"),
+    "reach": F("float", 3.0, min=0.0, doc="m, how near the area a walker must pass to be drawn"),
+    "visit_time": F("float", 10.0, min=0.0, doc="s, mean of the exponential time spent there"),
+})
+
 CLUSTER = Schema({
     "position": F("point", required=True, doc="m, centre of the area the persons start in (PedSim <agent>)"),
     "count": F("int", 1, min=1, doc="persons"),
@@ -173,6 +181,7 @@ SCENARIO = Schema({
     "crowd": F(CROWD),
     "waypoints": F(MapOf(F(WAYPOINT)), {}),
     "queues": F(MapOf(F(QUEUE)), {}),
+    "attractions": F(MapOf(F(ATTRACTION)), {}, doc="places passers-by stop at for a while (PedSim's shopping)"),
     "routes": F(MapOf(F(ROUTE)), {}),
     "sources": F(ListOf(F(SOURCE)), []),
     "standing": F(ListOf(F(STANDING)), []),

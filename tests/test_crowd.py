@@ -191,3 +191,26 @@ def test_groups_too_wide_for_a_corridor_enter_one_behind_another(make_scenario):
         inside = (crowd.pos[:, 0] > 2) & (crowd.pos[:, 0] < 38)
         assert (np.abs(crowd.pos[inside, 1] - 20) <= 1 - 0.25 + 1e-9).all()
     assert len(emitted) >= 8  # the groups did get in
+
+
+@pytest.mark.parametrize("strength", [0.0, 1000.0])
+def test_attraction_draws_passers_by_then_lets_them_go(make_scenario, strength):
+    # walking along y = 20 past a shop whose area spans y 22..24: with strength 0 nobody turns; with a huge
+    # strength the walker is drawn at once (p = 1 - exp(-0.05 x 1000 x 0.04) = 0.86 per step), walks to the
+    # area's nearest edge (y = 22), lingers, then walks on to the sink
+    sc = make_scenario(attractions={"shop": {"position": [20, 23], "size": [2, 2], "strength": strength,
+                                             "reach": 3.0, "visit_time": 5.0}},
+                       **one_route((35, 20), radius=0.5))
+    crowd = Crowd(sc, np.random.default_rng(11))
+    crowd.add_walkers(np.array([[5.0, 20.0]]), "r", desired_speed=1.3)
+    top, steps = 20.0, 0
+    while len(crowd.id) and steps < int(120 / DT):
+        crowd.step(DT)
+        steps += 1
+        if len(crowd.id):
+            top = max(top, crowd.pos[0, 1])
+    assert len(crowd.id) == 0  # it reached the sink either way
+    if strength == 0:
+        assert top == pytest.approx(20.0, abs=1e-6)
+    else:
+        assert top > 21.5  # it walked to the edge of the shop area, y = 22
