@@ -44,6 +44,13 @@ def _cmd_validate_scenario(args) -> int:
     return 0
 
 
+def _cmd_scenario_keys(args) -> int:
+    from scenarios.format import reference
+
+    print(reference())
+    return 0
+
+
 def _cmd_bench(args) -> int:
     from .bench import run_benchmarks
 
@@ -67,6 +74,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("validate-scenario", help="check a scenario file and say what it holds")
     p.add_argument("file", help="a YAML scenario (or a bundled name)")
     p.set_defaults(func=_cmd_validate_scenario)
+    p = sub.add_parser("scenario-keys", help="every key of the scenario format: kind, default, range, meaning")
+    p.set_defaults(func=_cmd_scenario_keys)
     p = sub.add_parser("bench", help="measure the crowd, the lasers, the tracker and the whole loop")
     p.add_argument("--json", help="also write the figures to this JSON file")
     p.add_argument("--quick", action="store_true", help="shorter measurements (for a smoke test)")

@@ -122,7 +122,7 @@ ROBOT = Schema({
 })
 
 LASER = Schema({
-    "name": F("str", required=True),
+    "name": F("str", required=True, doc="the laser's frame name"),
     "mount": F("pose", required=True, doc="m, m, rad: pose in base_link"),
     "height": F("float", 0.70, min=0.0, doc="m above the floor (seed 000: two lasers at 70 cm)"),
     "fov_deg": F("float", 190.0, min=0.0, exclusive_min=True, max=360.0, doc="deg (SICK LMS500)"),
@@ -153,9 +153,9 @@ TRACKER = Schema({  # the defaults are pipeline.tracker.TrackerParams' (a test k
 })
 
 PIPELINE = Schema({
-    "detector": F(DETECTOR),
+    "detector": F(DETECTOR, doc="the laser segment detector"),
     "fusion_distance": F("float", 0.4, min=0.0, doc="m, detections of two lasers nearer than this are one person"),
-    "tracker": F(TRACKER),
+    "tracker": F(TRACKER, doc="the nearest-neighbour tracker"),
 })
 
 EVALUATION = Schema({
@@ -171,23 +171,66 @@ MAP = Schema({
 # A file may start with ``base: NAME_OR_PATH``: the base scenario's data, with this file's keys laid over it
 # (mappings merge key by key, lists and values are replaced), before validation. See scenarios.loader.read_raw.
 SCENARIO = Schema({
-    "name": F("str", required=True),
-    "description": F("str", ""),
-    "seed": F("int", 0, min=0),
+    "name": F("str", required=True, doc="the scenario's name, used in outputs"),
+    "description": F("str", "", doc="what happens, in a sentence or two (its first line is listed)"),
+    "seed": F("int", 0, min=0, doc="seeds every random draw: same seed, same run, bit for bit"),
     "duration": F("float", 60.0, min=0.0, exclusive_min=True, doc="s of simulated time that are recorded"),
     "warmup": F("float", 0.0, min=0.0, doc="s of crowd-only simulation before the robot, sensors and scoring start, so flows are under way"),
     "dt": F("float", 0.04, min=0.0, exclusive_min=True, max=0.1, doc="s, simulation step"),
-    "map": F(MAP),
-    "crowd": F(CROWD),
-    "waypoints": F(MapOf(F(WAYPOINT)), {}),
-    "queues": F(MapOf(F(QUEUE)), {}),
+    "map": F(MAP, doc="the floor plan"),
+    "crowd": F(CROWD, doc="the social-force model and the agent types"),
+    "waypoints": F(MapOf(F(WAYPOINT)), {}, doc="named places routes lead through"),
+    "queues": F(MapOf(F(QUEUE)), {}, doc="named waiting lines routes lead through (PedSim's queues)"),
     "attractions": F(MapOf(F(ATTRACTION)), {}, doc="places passers-by stop at for a while (PedSim's shopping)"),
-    "routes": F(MapOf(F(ROUTE)), {}),
-    "sources": F(ListOf(F(SOURCE)), []),
-    "standing": F(ListOf(F(STANDING)), []),
+    "routes": F(MapOf(F(ROUTE)), {}, doc="named sequences of stages"),
+    "sources": F(ListOf(F(SOURCE)), [], doc="where persons enter, at a rate, in groups"),
+    "standing": F(ListOf(F(STANDING)), [], doc="single standing persons and static conversation groups"),
     "clusters": F(ListOf(F(CLUSTER)), [], doc="persons present from the start, on a route"),
-    "robot": F(ROBOT, required=True),
-    "sensors": F(Schema({"lasers": F(ListOf(F(LASER), min_items=1), required=True)}), required=True),
-    "pipeline": F(PIPELINE),
-    "evaluation": F(EVALUATION),
+    "robot": F(ROBOT, required=True, doc="the robot's start, route and limits"),
+    "sensors": F(Schema({"lasers": F(ListOf(F(LASER), min_items=1), required=True, doc="2D lasers on the robot")}),
+                 required=True, doc="the robot's sensors"),
+    "pipeline": F(PIPELINE, doc="detector, fusion and tracker parameters"),
+    "evaluation": F(EVALUATION, doc="how the tracks are scored"),
 })
+
+
+def reference() -> str:
+    """Every key of the scenario format as Markdown tables: key, kind, default, allowed range, meaning."""
+    from .schema import ListOf, MapOf, Schema
+
+    sections: list[tuple[str, Schema]] = [("(top level)", SCENARIO)]
+    lines = ["# The scenario format", "", "Generated from `scenarios/format.py` by `crowdsim scenario-keys`; "
+             "`NAME` stands for a name you choose.", ""]
+    k = 0
+    while k < len(sections):
+        title, schema = sections[k]
+        k += 1
+        lines += [f"## `{title}`", "", "| key | kind | default | range | meaning |", "|---|---|---|---|---|"]
+        for name, field in schema.fields.items():
+            kind, path = field.kind, name if title == "(top level)" else f"{title}.{name}"
+            while isinstance(kind, Field):
+                kind = kind.kind
+            if isinstance(kind, Schema):
+                sections.append((path, kind))
+                text = "mapping"
+            elif isinstance(kind, (ListOf, MapOf)):
+                item = kind.item.kind if isinstance(kind.item, Field) else kind.item
+                suffix = "[i]" if isinstance(kind, ListOf) else ".NAME"
+                if isinstance(item, Schema):
+                    sections.append((path + suffix, item))
+                    text = "list of mappings" if isinstance(kind, ListOf) else "mapping of names to mappings"
+                else:
+                    text = f"list of {item}" if isinstance(kind, ListOf) else f"mapping of names to {item}"
+            else:
+                text = str(kind)
+            default = "required" if field.required else ("" if isinstance(kind, Schema) else repr(field.default))
+            low = "" if field.min is None else (f"> {field.min:g}" if field.exclusive_min else f">= {field.min:g}")
+            high = "" if field.max is None else f"<= {field.max:g}"
+            bounds = ", ".join(b for b in (low, high) if b)
+            if field.choices:
+                bounds = " or ".join(field.choices)
+            if len(default) > 40:
+                default = "see scenarios/format.py"
+            lines.append(f"| `{name}` | {text} | {default} | {bounds} | {field.doc} |")
+        lines.append("")
+    return "\n".join(lines)

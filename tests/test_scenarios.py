@@ -409,3 +409,14 @@ def test_base_scenario_is_laid_under(tmp_path):
     assert sc["crowd"]["max_agents"] == 50 and sc["crowd"]["agent_types"] == full["crowd"]["agent_types"]
     loop = write(tmp_path, {"base": "loop.yaml", "name": "loop"}, "loop.yaml")
     expect_error(loop, "base", "leads back to this file")
+
+
+def test_the_committed_format_reference_is_current():
+    # docs/scenario-format.md is generated from the schema: regenerate it with `crowdsim scenario-keys`
+    from pathlib import Path
+
+    from scenarios.format import reference
+
+    committed = (Path(__file__).parent.parent / "docs" / "scenario-format.md").read_text()
+    assert committed == reference() + "\n"
+    assert "| `rate` | float | required | >= 0 | persons/s, mean emission rate (Poisson) |" in committed
