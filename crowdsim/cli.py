@@ -52,9 +52,14 @@ def _cmd_scenario_keys(args) -> int:
 
 
 def _cmd_bench(args) -> int:
-    from .bench import run_benchmarks
+    if args.what == "sim":
+        from .bench_sim import run_sim_benchmark
 
-    run_benchmarks(json_path=args.json, quick=args.quick)
+        run_sim_benchmark(quick=args.quick, json_path=args.json)
+    else:
+        from .bench import run_benchmarks
+
+        run_benchmarks(json_path=args.json, quick=args.quick)
     return 0
 
 
@@ -76,7 +81,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_validate_scenario)
     p = sub.add_parser("scenario-keys", help="every key of the scenario format: kind, default, range, meaning")
     p.set_defaults(func=_cmd_scenario_keys)
-    p = sub.add_parser("bench", help="measure the crowd, the lasers, the tracker and the whole loop")
+    p = sub.add_parser("bench", help="measure the crowd, the lasers, the tracker and the whole loop; "
+                                     "`bench sim`: the crowd against JuPedSim")
+    p.add_argument("what", nargs="?", choices=("loop", "sim"), default="loop",
+                   help="loop (default): every part and the airport loop; sim: the crowd simulator at 100, 1000 "
+                        "and 5000 agents side by side with JuPedSim's social force model")
     p.add_argument("--json", help="also write the figures to this JSON file")
     p.add_argument("--quick", action="store_true", help="shorter measurements (for a smoke test)")
     p.set_defaults(func=_cmd_bench)

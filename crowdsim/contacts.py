@@ -16,13 +16,16 @@ PERSON_MASS = 80.0  # kg; one mass for all: only ratios matter to the contact so
 ITERATIONS = 40  # Chipmunk solver iterations per substep
 COLLISION_SLOP = 0.002  # m of overlap Chipmunk tolerates before it pushes back
 CORRECTION_PER_STEP = 0.5  # share of an overlap Chipmunk removes per 0.04 s (its default: about 0.2)
+HASH_CELL = 0.5  # m, a body's diameter
 SUBSTEPS = 2  # Chipmunk steps per simulation step (dense crowds: fewer overlaps than 1)
 FIELDS = batch.BodyFields.POSITION | batch.BodyFields.VELOCITY
 
 
 class ContactSolver:
-    def __init__(self, walls: np.ndarray, robot_radius: float = 0.0):
+    def __init__(self, walls: np.ndarray, robot_radius: float = 0.0, capacity: int = 1000):
         self.space = pymunk.Space()
+        # a spatial hash of body-sized cells: Chipmunk's default tree rebuilds slowly for thousands of bodies
+        self.space.use_spatial_hash(HASH_CELL, 4 * max(capacity, 100))
         self.space.iterations = ITERATIONS
         self.space.collision_slop = COLLISION_SLOP
         # Chipmunk's bias is the share of an overlap left after one second

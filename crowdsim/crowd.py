@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from scenarios.geometry import closest_on_segments, segments_cross, wall_segments
+from scenarios.geometry import closest_on_segments, near_segments, pair_vectors, segments_cross, wall_segments
 
 from . import forces
 from .contacts import ContactSolver
@@ -59,7 +59,7 @@ class Crowd:
         self.rng = rng
         self.t = 0.0
         self.walls = wall_segments(scenario)
-        self.contacts = ContactSolver(self.walls, scenario["robot"]["radius"])
+        self.contacts = ContactSolver(self.walls, scenario["robot"]["radius"], self.p["max_agents"])
         self._robot_pos: np.ndarray | None = None
         self._next_id = 1
         self._next_group = 1
@@ -377,12 +377,12 @@ class Crowd:
                  else np.zeros((0, 2), np.int64))
         if len(pairs) == 0:
             return np.zeros((n, 2))
-        i = np.concatenate([pairs[:, 0], pairs[:, 1]])
-        j = np.concatenate([pairs[:, 1], pairs[:, 0]])
         if p["interaction"] == "moussaid2009":
-            return forces.moussaid2009(self.pos, self.vel, i, j, p["moussaid_strength"], p["moussaid_lambda"],
+            return forces.moussaid2009(self.pos, self.vel, pairs, p["moussaid_strength"], p["moussaid_lambda"],
                                        p["moussaid_gamma"], p["moussaid_n"], p["moussaid_n_prime"],
                                        walking=~self.holding)
+        i = np.concatenate([pairs[:, 0], pairs[:, 1]])
+        j = np.concatenate([pairs[:, 1], pairs[:, 0]])
         return forces.helbing_molnar1995(self.pos, self.vel, e, i, j, p["agent_strength"], p["agent_range"],
                                          p["step_time"], p["fov_deg"], p["out_of_view_weight"])
 
@@ -407,18 +407,21 @@ class Crowd:
     # -- contacts -----------------------------------------------------------------------------------------------
 
     def _push_out_of_walls(self, pos: np.ndarray):
+        """Move every body that overlaps a wall out along the wall's normal, the deepest overlap first (summing
+        pushes from the two walls of a corner would over-correct); a few passes settle corners."""
         if len(self.walls) == 0 or len(pos) == 0:
             return
         for _ in range(WALL_PASSES):
-            away, dist = closest_on_segments(pos, self.walls)
-            depth = self.radius[:, None] - dist
-            if not (depth > 0).any():
+            p, s = near_segments(pos, self.walls, self.radius)
+            away, dist = pair_vectors(pos, self.walls, p, s)
+            depth = self.radius[p] - dist
+            inside = depth > 0
+            if not inside.any():
                 return
-            n_hat = away / np.maximum(dist, 1e-12)[..., None]
-            push = np.where(depth > 0, depth, 0.0)[..., None] * n_hat
-            # the deepest wall first: summing pushes from two walls of a corner would over-correct
-            k = np.argmax(depth, axis=1)
-            pos += push[np.arange(len(pos)), k]
+            p, away, dist, depth = p[inside], away[inside], dist[inside], depth[inside]
+            order = np.lexsort((-depth, p))
+            first = order[np.unique(p[order], return_index=True)[1]]  # each body's deepest wall
+            pos[p[first]] += (depth[first] / np.maximum(dist[first], 1e-12))[:, None] * away[first]
 
     # -- stepping -----------------------------------------------------------------------------------------------
 

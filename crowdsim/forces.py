@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.geometry import closest_on_segments
+from scenarios.geometry import near_segments, pair_vectors
 
 
 NEGLIGIBLE = 0.005  # m/s^2: an interaction weaker than this (0.1% of Moussaid's A) is not computed
@@ -23,8 +23,8 @@ def desired_force(direction: np.ndarray, speed: np.ndarray, vel: np.ndarray, tau
     return (speed[:, None] * direction - vel) / tau
 
 
-def moussaid2009(pos: np.ndarray, vel: np.ndarray, i: np.ndarray, j: np.ndarray, strength: float,
-                 lam: float, gamma: float, n: float, n_prime: float, walking: np.ndarray | None = None) -> np.ndarray:
+def moussaid2009(pos: np.ndarray, vel: np.ndarray, pairs: np.ndarray, strength: float, lam: float, gamma: float,
+                 n: float, n_prime: float, walking: np.ndarray | None = None) -> np.ndarray:
     """Moussaid, Helbing et al. 2009 (Proc. R. Soc. B 276) agent interaction, the form PedSim uses.
 
     With e the unit vector from i to j and d their distance, the interaction vector D = lam (v_i - v_j) + e
@@ -34,28 +34,39 @@ def moussaid2009(pos: np.ndarray, vel: np.ndarray, i: np.ndarray, j: np.ndarray,
     At theta = 0 (a perfectly symmetric head-on meeting) there is no turning term, as in the paper
     (K = theta / |theta|); the random force breaks such ties. The turning term steers walkers round each other, so
     agents not ``walking`` (standing people) feel only the braking term, else they would circle each other.
+
+    ``pairs`` [m, 2] are unordered: seen from j, D and t change sign while |D|, B and theta do not, so one
+    evaluation gives both forces (f_j = -f_i but for whose turning term applies).
     """
     count = len(pos)
-    dx, dy = pos[j, 0] - pos[i, 0], pos[j, 1] - pos[i, 1]
-    d = np.maximum(np.sqrt(dx * dx + dy * dy), 1e-9)
-    ex, ey = dx / d, dy / d
-    Dx = lam * (vel[i, 0] - vel[j, 0]) + ex
-    Dy = lam * (vel[i, 1] - vel[j, 1]) + ey
+    state = np.concatenate([pos, vel], axis=1)
+    si, sj = np.take(state, pairs[:, 0], axis=0), np.take(state, pairs[:, 1], axis=0)
+    dx, dy = sj[:, 0] - si[:, 0], sj[:, 1] - si[:, 1]
+    dvx, dvy = si[:, 2] - sj[:, 2], si[:, 3] - sj[:, 3]
+    # neither term exceeds A exp(-d / B), and |D| <= lam |v_i - v_j| + 1: pairs whose force cannot reach
+    # NEGLIGIBLE m/s^2 are dropped before the costly part
+    reach = gamma * np.log(strength / NEGLIGIBLE) if strength > NEGLIGIBLE else 0.0
+    bound = reach * (lam * np.sqrt(dvx * dvx + dvy * dvy) + 1.0)
+    d2 = dx * dx + dy * dy
+    near = np.flatnonzero(d2 < bound * bound)
+    d = np.maximum(np.sqrt(d2[near]), 1e-9)
+    ex, ey = dx[near] / d, dy[near] / d
+    Dx, Dy = lam * dvx[near] + ex, lam * dvy[near] + ey
     nD = np.maximum(np.sqrt(Dx * Dx + Dy * Dy), 1e-9)
-    # neither term exceeds A exp(-d / B): pairs where that is under NEGLIGIBLE m/s^2 are dropped before the costly
-    # part (in a dense crowd walking one way, most pairs farther than about 2 m)
-    keep = d < gamma * nD * np.log(strength / NEGLIGIBLE) if strength > NEGLIGIBLE else np.zeros(len(d), bool)
-    i, d, ex, ey, Dx, Dy, nD = i[keep], d[keep], ex[keep], ey[keep], Dx[keep], Dy[keep], nD[keep]
     tx, ty = Dx / nD, Dy / nD
     theta = np.arctan2(tx * ey - ty * ex, tx * ex + ty * ey)
-    sign = np.sign(theta) if walking is None else np.sign(theta) * walking[i]
     B = gamma * nD
     base = -strength * np.exp(-d / B)
     along = base * np.exp(-(n_prime * B * theta) ** 2)
-    side = base * sign * np.exp(-(n * B * theta) ** 2)
-    fx = along * tx + side * -ty
-    fy = along * ty + side * tx
-    return _sum_per_agent(i, fx, fy, count)
+    side = base * np.sign(theta) * np.exp(-(n * B * theta) ** 2)
+    i, j = pairs[near, 0], pairs[near, 1]
+    side_i = side if walking is None else side * walking[i]
+    side_j = side if walking is None else side * walking[j]
+    # n_left = (-t_y, t_x); for j both t and n_left flip sign
+    fx_i, fy_i = along * tx - side_i * ty, along * ty + side_i * tx
+    fx_j, fy_j = -(along * tx - side_j * ty), -(along * ty + side_j * tx)
+    who = np.concatenate([i, j])
+    return _sum_per_agent(who, np.concatenate([fx_i, fx_j]), np.concatenate([fy_i, fy_j]), count)
 
 
 def in_view_weight(direction: np.ndarray, force: np.ndarray, fov_deg: float, out_of_view: float) -> np.ndarray:
@@ -92,11 +103,13 @@ def wall_force(pos: np.ndarray, direction: np.ndarray, walls: np.ndarray, streng
     """Helbing & Molnar 1995 wall repulsion U0/R exp(-d/R) from every segment nearer than ``reach``, summed."""
     if len(walls) == 0 or len(pos) == 0:
         return np.zeros_like(pos)
-    away, dist = closest_on_segments(pos, walls)
-    mag = np.where(dist < reach, strength / length * np.exp(-dist / length), 0.0)
-    f = mag[..., None] * away / np.maximum(dist, 1e-9)[..., None]
-    f *= in_view_weight(direction[:, None, :], f, fov_deg, out_of_view)[..., None]
-    return f.sum(axis=1)
+    p, s = near_segments(pos, walls, reach)
+    away, dist = pair_vectors(pos, walls, p, s)
+    near = dist < reach
+    p, away, dist = p[near], away[near], dist[near]
+    f = (strength / length * np.exp(-dist / length) / np.maximum(dist, 1e-9))[:, None] * away
+    f *= in_view_weight(direction[p], f, fov_deg, out_of_view)[:, None]
+    return _sum_per_agent(p, f[:, 0], f[:, 1], len(pos))
 
 
 def obstacle_disc_force(pos: np.ndarray, direction: np.ndarray, centre: np.ndarray, radius: float,

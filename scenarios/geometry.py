@@ -26,6 +26,26 @@ def closest_on_segments(points: np.ndarray, segs: np.ndarray) -> tuple[np.ndarra
     return away, np.linalg.norm(away, axis=-1)
 
 
+def near_segments(points: np.ndarray, segs: np.ndarray, reach: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs (point, segment) whose bounding boxes, the segment's grown by ``reach``, overlap: the only
+    pairs that can lie within ``reach`` of each other. Cheap comparisons only, so exact work stays sparse."""
+    lo = np.minimum(segs[:, 0], segs[:, 1])
+    hi = np.maximum(segs[:, 0], segs[:, 1])
+    r = np.broadcast_to(np.asarray(reach, float), len(points))[:, None]
+    x, y = points[:, 0:1], points[:, 1:2]
+    mask = (x >= lo[:, 0] - r) & (x <= hi[:, 0] + r) & (y >= lo[:, 1] - r) & (y <= hi[:, 1] + r)
+    return np.nonzero(mask)
+
+
+def pair_vectors(points: np.ndarray, segs: np.ndarray, p: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For index pairs (p, s): the vector from segment s's closest point to point p, and its length."""
+    a, ab = segs[s, 0], segs[s, 1] - segs[s, 0]
+    ap = points[p] - a
+    t = np.clip(np.einsum("kd,kd->k", ap, ab) / np.maximum(np.einsum("kd,kd->k", ab, ab), 1e-12), 0.0, 1.0)
+    away = ap - t[:, None] * ab
+    return away, np.linalg.norm(away, axis=1)
+
+
 def inside_polygon(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
     """Even-odd rule point-in-polygon for points [n, 2]."""
     x, y = points[:, 0:1], points[:, 1:2]
@@ -38,20 +58,25 @@ def inside_polygon(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
 
 def segments_cross(starts: np.ndarray, ends: np.ndarray, segs: np.ndarray) -> np.ndarray:
     """For moves ``starts`` -> ``ends`` [n, 2]: True where the move crosses (or touches) any segment [m, 2, 2]."""
+    out = np.zeros(len(starts), bool)
     if len(segs) == 0 or len(starts) == 0:
-        return np.zeros(len(starts), bool)
-    d = ends - starts  # [n, 2]
-    a, e = segs[:, 0], segs[:, 1] - segs[:, 0]  # [m, 2]
+        return out
+    mid = (starts + ends) / 2
+    p, s = near_segments(mid, segs, np.linalg.norm(ends - starts, axis=1) / 2 + 1e-9)
+    d = ends[p] - starts[p]
+    a, e = segs[s, 0], segs[s, 1] - segs[s, 0]
 
     def cross(u, v):
-        return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+        return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
 
-    denom = cross(d[:, None, :], e[None])  # [n, m]
-    oa = a[None] - starts[:, None, :]  # [n, m, 2]
+    denom = cross(d, e)
+    oa = a - starts[p]
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = cross(oa, e[None]) / denom  # along the move
-        u = cross(oa, d[:, None, :]) / denom  # along the segment
-    return ((np.abs(denom) > 1e-12) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)).any(axis=1)
+        t = cross(oa, e) / denom  # along the move
+        u = cross(oa, d) / denom  # along the segment
+    hit = (np.abs(denom) > 1e-12) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)
+    out[p[hit]] = True
+    return out
 
 
 def line_of_sight(origin: np.ndarray, points: np.ndarray, segs: np.ndarray) -> np.ndarray:
