@@ -65,10 +65,10 @@ def weidmann(rho) -> np.ndarray:
 # -- floor plans, placement, and the watch over every step ------------------------------------------------------
 
 
-def _scenario(name: str, walls: list, waypoints: dict, routes: dict, crowd: dict | None = None) -> dict:
+def _scenario(name: str, walls: list, waypoints: dict, routes: dict, params: dict | None = None) -> dict:
     return scenario_from_dict({
         "name": name,
-        "crowd": dict(crowd or {}),
+        "crowd": dict(params or {}),
         "map": {"walls": [np.asarray(w, float).tolist() for w in walls]},
         "waypoints": waypoints,
         "routes": routes,
@@ -222,14 +222,14 @@ def _clearance(pos: np.ndarray, walls: np.ndarray) -> np.ndarray:
 # -- RiMEA test 1: a straight corridor ---------------------------------------------------------------------------
 
 
-def rimea1(quick: bool = False, plot_dir: Path | None = None, seed: int = 1) -> dict:
+def rimea1(quick: bool = False, plot_dir: Path | None = None, seed: int = 1, params: dict | None = None) -> dict:
     """One adult at 1.33 m/s from rest along 40 m of a 2 m corridor; the time to cover the 40 m."""
     length, width, speed, limit = 40.0, 2.0, 1.33, 60.0
     # the corridor runs on 2.5 m beyond both ends, out of the walls' 2 m reach, so no end wall pushes or brakes
     x0, x1 = -2.5, length + 2.5
     walls = [[[x0, 0], [x1, 0], [x1, width], [x0, width], [x0, 0]]]
     sc = _scenario("rimea1", walls, {"end": {"position": [length + 1.5, width / 2], "radius": 0.5}},
-                   {"r": {"waypoints": ["end"], "sink": False}})
+                   {"r": {"waypoints": ["end"], "sink": False}}, params)
     crowd = Crowd(sc, np.random.default_rng(seed))
     watch = Watch(crowd.walls, Region(np.array(walls[0][:-1], float)))
     crowd.add_walkers(np.array([[0.0, width / 2]]), "r", desired_speed=speed)
@@ -280,7 +280,8 @@ def rimea1(quick: bool = False, plot_dir: Path | None = None, seed: int = 1) -> 
 # -- RiMEA test 4: the fundamental diagram on a ring -------------------------------------------------------------
 
 
-def _ring_scenario(centre_radius: float, width: float, segments: int, lookahead: float, spacing: float = 0.5):
+def _ring_scenario(centre_radius: float, width: float, segments: int, lookahead: float, spacing: float = 0.5,
+                   params: dict | None = None):
     """A ring corridor about the origin and K looped routes, route k starting at waypoint k.
 
     The waypoints lie on a circle of radius sqrt(R^2 + L^2) and are reached within L (the lookahead) of them, so a
@@ -297,7 +298,7 @@ def _ring_scenario(centre_radius: float, width: float, segments: int, lookahead:
     routes = {f"ring{k}": {"waypoints": [f"w{(k + i) % count}" for i in range(count)], "sink": False}
               for k in range(count)}
     outer, inner = _circle(r_out, segments), _circle(r_in, segments)
-    sc = _scenario("rimea4_ring", [outer, inner], wps, routes)
+    sc = _scenario("rimea4_ring", [outer, inner], wps, routes, params)
     region = Region(outer[:-1], [inner[:-1]])
     area = _polygon_area(outer[:-1]) - _polygon_area(inner[:-1])
     # the polygon's chords lie inside the outer circle: centres keep the radius from them, and from the inner one
@@ -305,13 +306,13 @@ def _ring_scenario(centre_radius: float, width: float, segments: int, lookahead:
     return sc, region, area, (centre_lo, centre_hi), r_wp, lookahead, count
 
 
-def ring_run(density: float, quick: bool = False, seed: int = 0) -> dict:
+def ring_run(density: float, quick: bool = False, seed: int = 0, params: dict | None = None) -> dict:
     """Persons at ``density`` (persons/m^2 of the ring's floor) walking round the ring; their mean speed along it."""
     if quick:
         R, W, segments, warmup, measure = 5.0, 2.5, 64, 10.0, 10.0
     else:
         R, W, segments, warmup, measure = 10.0, 4.0, 128, 30.0, 30.0
-    sc, region, area, (lo, hi), r_wp, lookahead, count = _ring_scenario(R, W, segments, W + 0.5)
+    sc, region, area, (lo, hi), r_wp, lookahead, count = _ring_scenario(R, W, segments, W + 0.5, params=params)
     radius = sc["crowd"]["agent_types"]["adult"]["radius"]
     n = int(round(density * area))
     out = {"density_target": density, "ring_centre_radius_m": R, "ring_width_m": W, "area_m2": area, "agents": n,
@@ -362,10 +363,10 @@ def ring_run(density: float, quick: bool = False, seed: int = 0) -> dict:
 
 
 def fundamental_diagram(quick: bool = False, plot_dir: Path | None = None, seed: int = 0,
-                        densities: tuple | None = None) -> dict:
+                        densities: tuple | None = None, params: dict | None = None) -> dict:
     if densities is None:
         densities = (0.5, 1.0, 2.0, 3.0) if quick else (0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
-    runs = [ring_run(d, quick, seed + k) for k, d in enumerate(densities)]
+    runs = [ring_run(d, quick, seed + k, params) for k, d in enumerate(densities)]
     watches = [r.pop("_watch") for r in runs if "_watch" in r]
     checked = [r for r in runs if r["density_target"] in WEIDMANN_CHECKED]
     good = [r for r in checked if r["set_up"] and abs(r["relative_error"]) <= WEIDMANN_TOLERANCE]
@@ -427,14 +428,14 @@ def fundamental_diagram(quick: bool = False, plot_dir: Path | None = None, seed:
 # -- RiMEA test 6: round a corner --------------------------------------------------------------------------------
 
 
-def rimea6(quick: bool = False, plot_dir: Path | None = None, seed: int = 6) -> dict:
+def rimea6(quick: bool = False, plot_dir: Path | None = None, seed: int = 6, params: dict | None = None) -> dict:
     """20 persons from the first 6 m of a 2 m corridor round a left corner; no one may cross a wall."""
     n, width, arm, limit = 20, 2.0, 12.0, 60.0
     outline = np.array([[0, 0], [arm, 0], [arm, arm], [arm - width, arm], [arm - width, width], [0, width]], float)
     walls = [np.vstack([outline, outline[:1]])]
     wps = {"corner": {"position": [arm - width / 2, width / 2], "radius": 1.0},
            "exit": {"position": [arm - width / 2, arm - 1.0], "radius": 0.8}}
-    sc = _scenario("rimea6", walls, wps, {"r": {"waypoints": ["corner", "exit"], "sink": True}})
+    sc = _scenario("rimea6", walls, wps, {"r": {"waypoints": ["corner", "exit"], "sink": True}}, params)
     rng = np.random.default_rng(seed)
     crowd = Crowd(sc, rng)
     radius = crowd.type_radius[crowd.type_names.index("adult")]
@@ -485,7 +486,8 @@ def rimea6(quick: bool = False, plot_dir: Path | None = None, seed: int = 6) -> 
 # -- RiMEA test 7: demographic speed distributions ---------------------------------------------------------------
 
 
-def free_speeds(agent_type: str, n: int, quick: bool = False, seed: int = 7) -> tuple[np.ndarray, dict]:
+def free_speeds(agent_type: str, n: int, quick: bool = False, seed: int = 7,
+                params: dict | None = None) -> tuple[np.ndarray, dict]:
     """Free walking speeds of ``n`` persons of ``agent_type``, each alone in its own lane.
 
     Lanes are 6 m apart (beyond the 5 m neighbour search) and 3 m from the walls (beyond their 2 m reach), so
@@ -500,7 +502,7 @@ def free_speeds(agent_type: str, n: int, quick: bool = False, seed: int = 7) -> 
     room = [[0, 0], [length, 0], [length, top], [0, top], [0, 0]]
     wps = {f"g{k}": {"position": [length - 3.0, float(y)], "radius": 0.3} for k, y in enumerate(ys)}
     routes = {f"lane{k}": {"waypoints": [f"g{k}"], "sink": False} for k in range(n)}
-    sc = _scenario("rimea7", [room], wps, routes, crowd={"random_force": 0.0})
+    sc = _scenario("rimea7", [room], wps, routes, {**(params or {}), "random_force": 0.0})
     crowd = Crowd(sc, np.random.default_rng(seed))
     for k, y in enumerate(ys):
         crowd.add_walkers(np.array([[3.0, y]]), f"lane{k}", agent_type=agent_type)
@@ -528,13 +530,14 @@ def _clipped_normal_moments(mean, std, lo, hi) -> tuple[float, float]:
     return float(e1), float(np.sqrt(max(e2 - e1**2, 0.0)))
 
 
-def rimea7(quick: bool = False, plot_dir: Path | None = None, seed: int = 7, n: int = 50) -> dict:
+def rimea7(quick: bool = False, plot_dir: Path | None = None, seed: int = 7, n: int = 50,
+           params: dict | None = None) -> dict:
     """Each agent type's measured free speeds: all within [speed_min, speed_max], the mean near speed_mean."""
-    types = _scenario("rimea7_types", [], {}, {})["crowd"]["agent_types"]
+    types = _scenario("rimea7_types", [], {}, {}, params)["crowd"]["agent_types"]
     measured_tol = 1e-3  # m/s: the measurement's own error (the relaxation's tail, rounding) is far below this
     per_type, watches, passed, parts = {}, [], True, []
     for k, (name, p) in enumerate(types.items()):
-        speeds, extra = free_speeds(name, n, quick, seed + k)
+        speeds, extra = free_speeds(name, n, quick, seed + k, params)
         watches.append(extra["watch"])
         in_range = (speeds >= p["speed_min"] - measured_tol) & (speeds <= p["speed_max"] + measured_tol)
         tolerance = 3 * p["speed_std"] / np.sqrt(n)  # 3 standard errors of the mean of n draws
@@ -582,7 +585,7 @@ def rimea7(quick: bool = False, plot_dir: Path | None = None, seed: int = 7, n: 
 # -- bottleneck flow against width -------------------------------------------------------------------------------
 
 
-def bottleneck_run(width: float, n: int, seed: int = 0, limit: float = 200.0) -> dict:
+def bottleneck_run(width: float, n: int, seed: int = 0, limit: float = 200.0, params: dict | None = None) -> dict:
     """``n`` persons leave a 10 m x 10 m room through a 2 m long bottleneck of ``width``; the steady flow through it.
 
     The flow is taken between the 10% and the 90% quantiles of the crossing times of the line across the
@@ -598,7 +601,7 @@ def bottleneck_run(width: float, n: int, seed: int = 0, limit: float = 200.0) ->
                       [x_end + far, side + far], [x_end, side + far], [x_end, y_hi], [side, y_hi], [side, side],
                       [0, side]], float)
     sc = _scenario("bottleneck", walls, {"out": {"position": [x_end + 3.0, side / 2], "radius": 1.5}},
-                   {"r": {"waypoints": ["out"], "sink": True}})
+                   {"r": {"waypoints": ["out"], "sink": True}}, params)
     rng = np.random.default_rng(seed)
     crowd = Crowd(sc, rng)
     radius = crowd.type_radius[crowd.type_names.index("adult")]
@@ -624,12 +627,12 @@ def bottleneck_run(width: float, n: int, seed: int = 0, limit: float = 200.0) ->
 
 
 def bottleneck(quick: bool = False, plot_dir: Path | None = None, seed: int = 0, widths: tuple | None = None,
-               n: int | None = None) -> dict:
+               n: int | None = None, params: dict | None = None) -> dict:
     if widths is None:
         widths = (0.8, 1.6, 2.4) if quick else (0.8, 1.0, 1.2, 1.6, 2.0, 2.4)
     if n is None:
         n = 60 if quick else 100
-    runs = [bottleneck_run(w, n, seed + k) for k, w in enumerate(widths)]
+    runs = [bottleneck_run(w, n, seed + k, params=params) for k, w in enumerate(widths)]
     watches = [r.pop("_watch") for r in runs]
     flows = np.array([r["flow_p_s"] for r in runs])
     w = np.array(widths, float)
@@ -644,6 +647,9 @@ def bottleneck(quick: bool = False, plot_dir: Path | None = None, seed: int = 0,
                          for r in runs)
     measured += f"; fit J = {intercept:.2f} + {slope:.2f} w; J/w in {lo:g}-{hi:g} at " \
                 f"{int(((specific >= lo) & (specific <= hi)).sum())}/{len(w)} widths"
+    stuck = [r for r in runs if r["crossed"] < n]
+    if stuck:
+        measured += "; NOT ALL THROUGH in 200 s: " + ", ".join(f"w {r['width_m']:g}: {r['crossed']}/{n}" for r in stuck)
     result = {
         "name": "Bottleneck", "title": "Bottleneck flow against width (room 10 m x 10 m, bottleneck 2 m long)",
         "criterion": "flow J grows with width w at every step (Seyfried et al. 2009: linear growth, J/w about "
@@ -706,7 +712,9 @@ def _report(results: dict) -> str:
     checks = results["checks"]
     lines = ["# crowdsim validation", "",
              f"{'Quick' if results['quick'] else 'Full'} run, {results['seconds']:.0f} s; simulation step "
-             f"{DT:g} s; {'all checks pass' if results['passed'] else 'SOME CHECKS FAIL'}.", "",
+             f"{DT:g} s; crowd parameters: "
+             + (", ".join(f"{k} = {v}" for k, v in results["crowd_params"].items()) or "the scenario format's defaults")
+             + f"; {'all checks pass' if results['passed'] else 'SOME CHECKS FAIL'}.", "",
              "| test | criterion | measured | pass |", "|---|---|---|---|"]
     for c in checks:
         lines.append(f"| {c['name']} | {c['criterion']} | {c['measured']} | {'pass' if c['passed'] else '**FAIL**'} |")
@@ -748,8 +756,11 @@ def _report(results: dict) -> str:
     return "\n".join(lines)
 
 
-def run_validation(out_dir: Path, quick: bool = False, progress: bool = True) -> dict:
-    """Run every check, write ``report.md``, ``validation.json`` and the PNGs into ``out_dir``; return the results."""
+def run_validation(out_dir: Path, quick: bool = False, progress: bool = True, params: dict | None = None) -> dict:
+    """Run every check, write ``report.md``, ``validation.json`` and the PNGs into ``out_dir``; return the results.
+
+    ``quick`` runs each check at a smaller size (a smaller ring, fewer densities and widths, shorter runs);
+    ``params`` overrides keys of the scenario format's ``crowd`` section (the defaults otherwise)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
@@ -758,7 +769,7 @@ def run_validation(out_dir: Path, quick: bool = False, progress: bool = True) ->
     for name, fn in bar:
         bar.set_postfix_str(name)
         t = time.perf_counter()
-        result = fn(quick=quick, plot_dir=out_dir)
+        result = fn(quick=quick, plot_dir=out_dir, params=params)
         result["seconds"] = time.perf_counter() - t
         checks.append(result)
     bar.close()
@@ -771,7 +782,7 @@ def run_validation(out_dir: Path, quick: bool = False, progress: bool = True) ->
         "body_steps_wrong_side": sum(c["safety"]["body_steps_wrong_side"] for c in checks),
         "steps_checked": sum(c["safety"]["steps_checked"] for c in checks),
         "walls_ok": all(c["safety"]["walls_ok"] for c in checks)})
-    results = {"quick": quick, "dt_s": DT, "seconds": time.perf_counter() - start,
+    results = {"quick": quick, "dt_s": DT, "crowd_params": dict(params or {}), "seconds": time.perf_counter() - start,
                "passed": all(c["passed"] for c in checks) and safety["walls_ok"], "safety": safety,
                "checks": checks}
     results = _jsonable(results)

@@ -25,9 +25,9 @@ def bundled_scenarios() -> dict[str, str]:
 
 
 def resolve(name_or_path: str) -> Path:
-    """A bundled name (``airport_disembarkation``) or a path to a YAML file."""
+    """A bundled name (``airport_disembarkation``), a path to a YAML file, or a PedSim XML scenario file."""
     path = Path(name_or_path)
-    if path.suffix in (".yaml", ".yml") or path.exists():
+    if path.suffix in (".yaml", ".yml", ".xml") or path.exists():
         if not path.is_file():
             raise ScenarioError(str(path), "<file>", "no such scenario file")
         return path
@@ -35,7 +35,7 @@ def resolve(name_or_path: str) -> Path:
     if bundled.is_file():
         return bundled
     names = ", ".join(bundled_scenarios())
-    raise ScenarioError(name_or_path, "<scenario>", f"not a bundled scenario nor a YAML file; bundled: {names}")
+    raise ScenarioError(name_or_path, "<scenario>", f"not a bundled scenario, a YAML file nor a PedSim XML file; bundled: {names}")
 
 
 def merge(base: dict, changes: dict) -> dict:
@@ -74,9 +74,15 @@ def read_raw(path: Path, seen: tuple = ()) -> dict:
 
 
 def load_scenario(name_or_path: str, **overrides) -> dict:
-    """The validated scenario as plain data, defaults filled in; ``overrides`` replace top-level keys."""
+    """The validated scenario as plain data, defaults filled in; ``overrides`` replace top-level keys. A ``.xml`` path is
+    read as a PedSim scenario (``scenarios.pedsim``)."""
     path = resolve(name_or_path)
-    raw = read_raw(path)
+    if path.suffix.lower() == ".xml":
+        from .pedsim import pedsim_to_scenario  # pedsim builds on this module
+
+        raw = pedsim_to_scenario(path)
+    else:
+        raw = read_raw(path)
     raw.update({k: v for k, v in overrides.items() if v is not None})
     return scenario_from_dict(raw, str(path))
 

@@ -36,7 +36,8 @@ How PedSim's elements map (PedSim's units are metres, as ours):
     The first type-2 agent is the ``robot``: start at its (x, y) (dx, dy and n ignored), heading towards its first
     stage at another place, its route the stages' positions, driven in a loop; a single stage gives the route
     [start, stage] driven once. Further type-2 agents: a warning, ignored. Without any, the robot is parked with no
-    route at the first waypoint clear of the walls (else the walls' bounding-box centre) and a warning says so.
+    route at the first waypoint its radius away from every wall (else the walls' bounding-box centre, moved off the
+    walls if need be) and a warning says so.
 ``<source x y n dx dy type>`` with stages
     pedsim_ros reads it as an AgentCluster of n persons (present from the start) plus a SpawnArea that adds n more
     every ``spawn_period`` (a ROS parameter, 5 s by default). So: a ``clusters`` entry of n persons and a
@@ -49,11 +50,12 @@ waypoints and queues share one namespace, and a later definition of a name repla
 
 Places the loader requires to be walkable (waypoints, queues, sources, standing persons: at least the largest body
 radius, 0.25 m, from every wall) that PedSim files put on or next to a wall are moved the least distance that gives
-that clearance plus 5 cm, with a warning naming the element and its line. The robot's start needs its own radius
-(0.425 m) plus 5 cm.
+that clearance plus 5 cm, with a warning naming the element and its line (a place exactly on a wall leaves it towards
+the side the walls' bounding-box centre is on). The robot's start needs its own radius, 0.425 m, in the same way.
 
 The rest is filled in: name = file stem, description "PedSim scenario <file name>", seed 0, 60 s, the airport
-scenario's two back-to-back lasers at 0.70 m, and the format's defaults (crowd, pipeline, evaluation).
+scenario's two back-to-back lasers at 0.70 m, and the format's defaults (crowd, pipeline, evaluation), except that
+``crowd.max_agents`` is raised above the number of persons present at the start when that reaches the default.
 """
 
 from __future__ import annotations
@@ -74,7 +76,7 @@ SPAWN_PERIOD = 5.0  # s, pedsim_ros's default ``spawn_period``: a <source> adds 
 QUEUE_SERVICE_TIME = 1.0  # s, mean of pedsim_ros's Gamma(alpha=2, beta=0.5 s) wait at the head of a line
 BODY_CLEARANCE = max(t["radius"] for t in DEFAULT_AGENT_TYPES.values())  # m, what the loader asks of places
 MARGIN = 0.05  # m, added to a clearance when a place has to be moved
-ROBOT_CLEARANCE = ROBOT.fields["radius"].default + MARGIN  # m, of the robot's start from every wall
+ROBOT_CLEARANCE = ROBOT.fields["radius"].default  # m, the robot start's least distance from every wall
 DEFAULT_MAX_AGENTS = CROWD.fields["max_agents"].default
 GRID_SPACING = 0.7  # m, between standing persons when a cluster without stages has no area to spread over
 AGENT_TYPES = {0: "adult", 1: "child", 2: "robot", 3: "elder"}  # pedsim_ros's Ped::Tagent::AgentType
