@@ -51,6 +51,20 @@ def _cmd_scenario_keys(args) -> int:
     return 0
 
 
+def _cmd_validate(args) -> int:
+    from .run import check_out_dir
+    from .validation import run_validation
+
+    out = Path(args.out) if args.out else Path("runs") / f"validation-{time.strftime('%Y%m%d-%H%M%S')}"
+    check_out_dir(out)
+    results = run_validation(out, quick=args.quick, progress=True)
+    for check in results["checks"]:
+        print(f"{'pass' if check['passed'] else 'FAIL'}  {check['name']}")
+    print(f"largest overlap between two persons: {100 * results['safety']['max_overlap_m']:.1f} cm; "
+          f"report: {out / 'report.md'}")
+    return 0
+
+
 def _cmd_bench(args) -> int:
     if args.what == "sim":
         from .bench_sim import run_sim_benchmark
@@ -79,6 +93,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("validate-scenario", help="check a scenario file and say what it holds")
     p.add_argument("file", help="a YAML scenario (or a bundled name)")
     p.set_defaults(func=_cmd_validate_scenario)
+    p = sub.add_parser("validate", help="the crowd model against RiMEA tests 1, 4, 6, 7, Weidmann and bottlenecks")
+    p.add_argument("--out", help="report directory (default runs/validation-<time>); must be new or empty")
+    p.add_argument("--quick", action="store_true", help="the same checks at a smaller size")
+    p.set_defaults(func=_cmd_validate)
     p = sub.add_parser("scenario-keys", help="every key of the scenario format: kind, default, range, meaning")
     p.set_defaults(func=_cmd_scenario_keys)
     p = sub.add_parser("bench", help="measure the crowd, the lasers, the tracker and the whole loop; "

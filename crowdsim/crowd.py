@@ -380,7 +380,8 @@ class Crowd:
         if p["interaction"] == "moussaid2009":
             return forces.moussaid2009(self.pos, self.vel, pairs, p["moussaid_strength"], p["moussaid_lambda"],
                                        p["moussaid_gamma"], p["moussaid_n"], p["moussaid_n_prime"],
-                                       walking=~self.holding)
+                                       walking=~self.holding, direction=e, fov_deg=p["fov_deg"],
+                                       out_of_view=p["out_of_view_weight"])
         i = np.concatenate([pairs[:, 0], pairs[:, 1]])
         j = np.concatenate([pairs[:, 1], pairs[:, 0]])
         return forces.helbing_molnar1995(self.pos, self.vel, e, i, j, p["agent_strength"], p["agent_range"],
@@ -392,14 +393,14 @@ class Crowd:
         e, speed = self.desired_direction()
         acc = forces.desired_force(e, speed, self.vel, p["relaxation_time"])
         acc += self.interaction_forces(e)
-        acc += forces.wall_force(self.pos, e, self.walls, p["wall_strength"], p["wall_range"],
+        acc += forces.wall_force(self.pos, self.radius, e, self.walls, p["wall_strength"], p["wall_range"],
                                  p["wall_interaction_range"], p["fov_deg"], p["out_of_view_weight"])
         walking_groups = np.where(self.holding, -1, self.group)
         acc += forces.group_forces(self.pos, self.vel, e, self.radius, walking_groups, p["group_gaze"],
                                    p["group_coherence"], p["group_repulsion"])
         if robot_pos is not None:
             acc += forces.obstacle_disc_force(self.pos, e, robot_pos, robot_radius, p["robot_strength"],
-                                              p["wall_range"], p["fov_deg"], p["out_of_view_weight"])
+                                              p["robot_range"], p["fov_deg"], p["out_of_view_weight"])
         if p["random_force"] > 0:
             acc += self.rng.normal(0.0, p["random_force"], acc.shape)
         return acc

@@ -24,7 +24,8 @@ def desired_force(direction: np.ndarray, speed: np.ndarray, vel: np.ndarray, tau
 
 
 def moussaid2009(pos: np.ndarray, vel: np.ndarray, pairs: np.ndarray, strength: float, lam: float, gamma: float,
-                 n: float, n_prime: float, walking: np.ndarray | None = None) -> np.ndarray:
+                 n: float, n_prime: float, walking: np.ndarray | None = None, direction: np.ndarray | None = None,
+                 fov_deg: float = 360.0, out_of_view: float = 1.0) -> np.ndarray:
     """Moussaid, Helbing et al. 2009 (Proc. R. Soc. B 276) agent interaction, the form PedSim uses.
 
     With e the unit vector from i to j and d their distance, the interaction vector D = lam (v_i - v_j) + e
@@ -36,7 +37,9 @@ def moussaid2009(pos: np.ndarray, vel: np.ndarray, pairs: np.ndarray, strength: 
     agents not ``walking`` (standing people) feel only the braking term, else they would circle each other.
 
     ``pairs`` [m, 2] are unordered: seen from j, D and t change sign while |D|, B and theta do not, so one
-    evaluation gives both forces (f_j = -f_i but for whose turning term applies).
+    evaluation gives both forces (f_j = -f_i but for whose turning term applies). With ``direction`` (the walking
+    directions) the field-of-view weighting of Helbing & Molnar 1995 applies: people react less to those behind,
+    which is what makes a dense crowd slow down (else pushes from behind cancel the braking from the front).
     """
     count = len(pos)
     state = np.concatenate([pos, vel], axis=1)
@@ -63,10 +66,13 @@ def moussaid2009(pos: np.ndarray, vel: np.ndarray, pairs: np.ndarray, strength: 
     side_i = side if walking is None else side * walking[i]
     side_j = side if walking is None else side * walking[j]
     # n_left = (-t_y, t_x); for j both t and n_left flip sign
-    fx_i, fy_i = along * tx - side_i * ty, along * ty + side_i * tx
-    fx_j, fy_j = -(along * tx - side_j * ty), -(along * ty + side_j * tx)
+    fx = np.concatenate([along * tx - side_i * ty, -(along * tx - side_j * ty)])
+    fy = np.concatenate([along * ty + side_i * tx, -(along * ty + side_j * tx)])
     who = np.concatenate([i, j])
-    return _sum_per_agent(who, np.concatenate([fx_i, fx_j]), np.concatenate([fy_i, fy_j]), count)
+    if direction is not None and out_of_view < 1.0:
+        w = in_view_weight(direction[who], np.stack([fx, fy], 1), fov_deg, out_of_view)
+        fx, fy = fx * w, fy * w
+    return _sum_per_agent(who, fx, fy, count)
 
 
 def in_view_weight(direction: np.ndarray, force: np.ndarray, fov_deg: float, out_of_view: float) -> np.ndarray:
@@ -98,16 +104,25 @@ def helbing_molnar1995(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, 
     return _sum_per_agent(i, w * fx, w * fy, count)
 
 
-def wall_force(pos: np.ndarray, direction: np.ndarray, walls: np.ndarray, strength: float, length: float,
-               reach: float, fov_deg: float, out_of_view: float) -> np.ndarray:
-    """Helbing & Molnar 1995 wall repulsion U0/R exp(-d/R) from every segment nearer than ``reach``, summed."""
+def wall_force(pos: np.ndarray, radius: np.ndarray, direction: np.ndarray, walls: np.ndarray, strength: float,
+               length: float, reach: float, fov_deg: float, out_of_view: float) -> np.ndarray:
+    """Wall repulsion A exp(-(d - r) / B) on the gap between body and wall (Helbing, Farkas & Vicsek 2000: A = 2000 N
+    on 80 kg, B = 0.08 m) from every segment nearer than ``reach``, summed; a corner shared by two segments repels
+    once."""
     if len(walls) == 0 or len(pos) == 0:
         return np.zeros_like(pos)
     p, s = near_segments(pos, walls, reach)
     away, dist = pair_vectors(pos, walls, p, s)
     near = dist < reach
     p, away, dist = p[near], away[near], dist[near]
-    f = (strength / length * np.exp(-dist / length) / np.maximum(dist, 1e-9))[:, None] * away
+    # a corner where two segments meet is one wall point, not two: count each (agent, closest point) once
+    closest = np.round((pos[p] - away) / 1e-6)
+    order = np.lexsort((closest[:, 1], closest[:, 0], p))
+    same = np.zeros(len(order), bool)
+    same[1:] = (p[order][1:] == p[order][:-1]) & (closest[order][1:] == closest[order][:-1]).all(axis=1)
+    keep = order[~same]
+    p, away, dist = p[keep], away[keep], dist[keep]
+    f = (strength * np.exp(-(dist - radius[p]) / length) / np.maximum(dist, 1e-9))[:, None] * away
     f *= in_view_weight(direction[p], f, fov_deg, out_of_view)[:, None]
     return _sum_per_agent(p, f[:, 0], f[:, 1], len(pos))
 
