@@ -42,13 +42,15 @@ def moussaid2009(pos: np.ndarray, vel: np.ndarray, pairs: np.ndarray, strength: 
     which is what makes a dense crowd slow down (else pushes from behind cancel the braking from the front).
     """
     count = len(pos)
-    state = np.concatenate([pos, vel], axis=1)
+    # single precision for the pair arithmetic: it is memory-bound, and forces need no more than 7 digits
+    state = np.concatenate([pos, vel], axis=1).astype(np.float32)
     si, sj = np.take(state, pairs[:, 0], axis=0), np.take(state, pairs[:, 1], axis=0)
     dx, dy = sj[:, 0] - si[:, 0], sj[:, 1] - si[:, 1]
     dvx, dvy = si[:, 2] - sj[:, 2], si[:, 3] - sj[:, 3]
     # neither term exceeds A exp(-d / B), and |D| <= lam |v_i - v_j| + 1: pairs whose force cannot reach
     # NEGLIGIBLE m/s^2 are dropped before the costly part
-    reach = gamma * np.log(strength / NEGLIGIBLE) if strength > NEGLIGIBLE else 0.0
+    reach = np.float32(gamma * np.log(strength / NEGLIGIBLE) if strength > NEGLIGIBLE else 0.0)
+    lam, gamma, strength = np.float32(lam), np.float32(gamma), np.float32(strength)
     bound = reach * (lam * np.sqrt(dvx * dvx + dvy * dvy) + 1.0)
     d2 = dx * dx + dy * dy
     near = np.flatnonzero(d2 < bound * bound)
@@ -69,8 +71,11 @@ def moussaid2009(pos: np.ndarray, vel: np.ndarray, pairs: np.ndarray, strength: 
     fx = np.concatenate([along * tx - side_i * ty, -(along * tx - side_j * ty)])
     fy = np.concatenate([along * ty + side_i * tx, -(along * ty + side_j * tx)])
     who = np.concatenate([i, j])
-    if direction is not None and out_of_view < 1.0:
-        w = in_view_weight(direction[who], np.stack([fx, fy], 1), fov_deg, out_of_view)
+    if direction is not None and out_of_view < 1.0:  # in_view_weight, on components: this is the hot path
+        heading = direction.astype(np.float32)
+        dx_w, dy_w = np.take(heading[:, 0], who), np.take(heading[:, 1], who)
+        seen = -(dx_w * fx + dy_w * fy) >= np.sqrt(fx * fx + fy * fy) * np.cos(np.radians(fov_deg) / 2)
+        w = np.where(seen, 1.0, out_of_view)
         fx, fy = fx * w, fy * w
     return _sum_per_agent(who, fx, fy, count)
 
