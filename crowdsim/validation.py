@@ -67,9 +67,10 @@ def weidmann(rho) -> np.ndarray:
 
 
 def _scenario(name: str, walls: list, waypoints: dict, routes: dict, params: dict | None = None) -> dict:
+    """A validation scenario: the model's defaults, but no random force (the checks measure the model itself)."""
     return scenario_from_dict({
         "name": name,
-        "crowd": dict(params or {}),
+        "crowd": {"random_force": 0.0, **(params or {})},
         "map": {"walls": [np.asarray(w, float).tolist() for w in walls]},
         "waypoints": waypoints,
         "routes": routes,
@@ -513,7 +514,7 @@ def free_speeds(agent_type: str, n: int, quick: bool = False, seed: int = 7,
     room = [[0, 0], [length, 0], [length, top], [0, top], [0, 0]]
     wps = {f"g{k}": {"position": [length - 3.0, float(y)], "radius": 0.3} for k, y in enumerate(ys)}
     routes = {f"lane{k}": {"waypoints": [f"g{k}"], "sink": False} for k in range(n)}
-    sc = _scenario("rimea7", [room], wps, routes, {**(params or {}), "random_force": 0.0})
+    sc = _scenario("rimea7", [room], wps, routes, params)
     crowd = Crowd(sc, np.random.default_rng(seed))
     for k, y in enumerate(ys):
         crowd.add_walkers(np.array([[3.0, y]]), f"lane{k}", agent_type=agent_type)
