@@ -44,19 +44,22 @@ def moussaid2009(pos: np.ndarray, vel: np.ndarray, pairs: np.ndarray, strength: 
     count = len(pos)
     # single precision for the pair arithmetic: it is memory-bound, and forces need no more than 7 digits
     state = np.concatenate([pos, vel], axis=1).astype(np.float32)
-    si, sj = np.take(state, pairs[:, 0], axis=0), np.take(state, pairs[:, 1], axis=0)
-    dx, dy = sj[:, 0] - si[:, 0], sj[:, 1] - si[:, 1]
-    dvx, dvy = si[:, 2] - sj[:, 2], si[:, 3] - sj[:, 3]
+    # one [m, 4] difference (j - i: position, velocity) instead of a temporary per component
+    diff = np.take(state, pairs[:, 1], axis=0)
+    diff -= np.take(state, pairs[:, 0], axis=0)
+    d2 = np.einsum("ij,ij->i", diff[:, :2], diff[:, :2])
     # neither term exceeds A exp(-d / B), and |D| <= lam |v_i - v_j| + 1: pairs whose force cannot reach
     # NEGLIGIBLE m/s^2 are dropped before the costly part
     reach = np.float32(gamma * np.log(strength / NEGLIGIBLE) if strength > NEGLIGIBLE else 0.0)
     lam, gamma, strength = np.float32(lam), np.float32(gamma), np.float32(strength)
-    bound = reach * (lam * np.sqrt(dvx * dvx + dvy * dvy) + 1.0)
-    d2 = dx * dx + dy * dy
+    bound = np.sqrt(np.einsum("ij,ij->i", diff[:, 2:], diff[:, 2:]))
+    bound *= lam * reach
+    bound += reach
     near = np.flatnonzero(d2 < bound * bound)
+    diff = diff[near]
     d = np.maximum(np.sqrt(d2[near]), 1e-9)
-    ex, ey = dx[near] / d, dy[near] / d
-    Dx, Dy = lam * dvx[near] + ex, lam * dvy[near] + ey
+    ex, ey = diff[:, 0] / d, diff[:, 1] / d
+    Dx, Dy = ex - lam * diff[:, 2], ey - lam * diff[:, 3]  # lam (v_i - v_j) + e
     nD = np.maximum(np.sqrt(Dx * Dx + Dy * Dy), 1e-9)
     tx, ty = Dx / nD, Dy / nD
     theta = np.arctan2(tx * ey - ty * ex, tx * ex + ty * ey)
