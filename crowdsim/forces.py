@@ -68,19 +68,21 @@ def moussaid2009(pos: np.ndarray, vel: np.ndarray, pairs: np.ndarray, strength: 
     along = base * np.exp(-(n_prime * B * theta) ** 2)
     side = base * np.sign(theta) * np.exp(-(n * B * theta) ** 2)
     i, j = pairs[near, 0], pairs[near, 1]
-    side_i = side if walking is None else side * walking[i]
-    side_j = side if walking is None else side * walking[j]
-    # n_left = (-t_y, t_x); for j both t and n_left flip sign
-    fx = np.concatenate([along * tx - side_i * ty, -(along * tx - side_j * ty)])
-    fy = np.concatenate([along * ty + side_i * tx, -(along * ty + side_j * tx)])
-    who = np.concatenate([i, j])
-    if direction is not None and out_of_view < 1.0:  # in_view_weight, on components: this is the hot path
-        heading = direction.astype(np.float32)
-        dx_w, dy_w = np.take(heading[:, 0], who), np.take(heading[:, 1], who)
-        seen = -(dx_w * fx + dy_w * fy) >= np.sqrt(fx * fx + fy * fy) * np.cos(np.radians(fov_deg) / 2)
-        w = np.where(seen, 1.0, out_of_view)
-        fx, fy = fx * w, fy * w
-    return _sum_per_agent(who, fx, fy, count)
+    cos_half = np.float32(np.cos(np.radians(fov_deg) / 2))
+    heading = None if direction is None or out_of_view >= 1.0 else direction.astype(np.float32)
+    total = np.zeros((count, 2))
+    # i feels f, j feels -f (t and n_left flip sign for j), each with its own turning flag and view weight
+    for who, sign in ((i, 1.0), (j, -1.0)):
+        turn = side if walking is None else side * walking[who]
+        fx = sign * (along * tx - turn * ty)  # n_left = (-t_y, t_x)
+        fy = sign * (along * ty + turn * tx)
+        if heading is not None:  # in_view_weight, on components: this is the hot path
+            seen = -(np.take(heading[:, 0], who) * fx + np.take(heading[:, 1], who) * fy) >= (
+                np.sqrt(fx * fx + fy * fy) * cos_half)
+            w = np.where(seen, np.float32(1.0), np.float32(out_of_view))
+            fx, fy = fx * w, fy * w
+        total += _sum_per_agent(who, fx, fy, count)
+    return total
 
 
 def in_view_weight(direction: np.ndarray, force: np.ndarray, fov_deg: float, out_of_view: float) -> np.ndarray:
