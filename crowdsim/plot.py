@@ -25,8 +25,11 @@ def _trajectories(rows: np.ndarray, xy: np.ndarray):
 
 
 def plot_run(path, walls: np.ndarray, gt: np.ndarray, tracks: np.ndarray, robot_path: np.ndarray,
-             world_T_odom: np.ndarray, title: str) -> None:
+             world_T_odom: np.ndarray, crowd: np.ndarray, title: str) -> None:
+    """``crowd`` rows (id, x, y) in the world frame: everyone, in range or not, drawn faintly beneath the rest."""
     fig, ax = plt.subplots(figsize=(9, 9))
+    if len(crowd):
+        ax.scatter(crowd[:, 1], crowd[:, 2], s=0.5, color="0.85", zorder=0)
     for seg in walls:
         ax.plot(seg[:, 0], seg[:, 1], color="0.2", lw=2)
     if len(gt):
@@ -39,6 +42,7 @@ def plot_run(path, walls: np.ndarray, gt: np.ndarray, tracks: np.ndarray, robot_
     if len(robot_path):
         ax.plot(robot_path[:, 0], robot_path[:, 1], color="tab:blue", lw=3, alpha=0.5, label="robot")
         ax.plot(*robot_path[-1, :2], "o", color="tab:blue", ms=10)
+    ax.scatter([], [], s=4, color="0.85", label="everyone (outside the robot's range too)")
     ax.plot([], [], color="0.6", lw=0.6, label="ground truth")
     ax.plot([], [], color=cmap(0), lw=1.2, label="tracks (colour = id)")
     ax.set_aspect("equal")

@@ -21,6 +21,7 @@ from scenarios.geometry import wall_segments
 from .loop import Simulation
 
 CSV_HEADER = "frame,t,id,x,y,vx,vy"
+CROWD_EVERY = 5  # tracking cycles between the crowd snapshots drawn in the top-down picture
 
 
 class RunDirError(ValueError):
@@ -96,7 +97,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     sim.warm_up()
     warmup_s = time.perf_counter() - start
     recording = Recording(tmp / "recording.rrd", wall_segments(scenario), sim.lasers) if rrd else None
-    gt_rows, track_rows, counts, robot_path, odom = [], [], [], [], []
+    gt_rows, track_rows, counts, robot_path, odom, crowd = [], [], [], [], [], []
     duration = scenario["duration"]
     bar = tqdm(total=round(duration, 2), unit="sim s", disable=not progress, desc=scenario["name"],
                bar_format="{l_bar}{bar}| {n:.1f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
@@ -107,6 +108,8 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         counts.append(len(frame.groundtruth))
         robot_path.append(frame.robot_pose)
         odom.append(frame.world_T_odom)
+        if frame.index % CROWD_EVERY == 0:  # everyone, in range or not, for the picture
+            crowd.append(np.column_stack([frame.agents.id, frame.agents.position]))
         if recording:
             recording.log(frame)
         bar.update(round(frame.stamp - t0, 2) - bar.n)
@@ -143,5 +146,5 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         f"{metrics['groundtruth']['max_persons_in_range']} at most.\n\n![top-down view](topdown.png)\n")
     plot_run(tmp / "topdown.png", wall_segments(scenario), np.concatenate(gt_rows) if gt_rows else np.zeros((0, 7)),
              np.concatenate(track_rows) if track_rows else np.zeros((0, 7)), np.array(robot_path),
-             np.array(odom), f"{scenario['name']}, seed {scenario['seed']}")
+             np.array(odom), np.concatenate(crowd) if crowd else np.zeros((0, 3)), f"{scenario['name']}, seed {scenario['seed']}")
     return metrics
