@@ -252,7 +252,8 @@ class Crowd:
 
     def _remove(self, keep: np.ndarray):
         self.contacts.keep(keep)
-        for name in ("id", "pos", "vel", "v0", "kind", "radius", "group", "route", "wp", "goal", "goal_radius", "walked",
+        for name in ("id", "pos", "vel", "v0", "kind", "radius", "group", "route", "wp", "goal", "goal_radius",
+                     "walked",
                      "slow_time", "queued", "visiting", "visit_end", "visited"):
             setattr(self, name, getattr(self, name)[keep])
 

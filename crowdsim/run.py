@@ -146,5 +146,6 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         f"{metrics['groundtruth']['max_persons_in_range']} at most.\n\n![top-down view](topdown.png)\n")
     plot_run(tmp / "topdown.png", wall_segments(scenario), np.concatenate(gt_rows) if gt_rows else np.zeros((0, 7)),
              np.concatenate(track_rows) if track_rows else np.zeros((0, 7)), np.array(robot_path),
-             np.array(odom), np.concatenate(crowd) if crowd else np.zeros((0, 3)), f"{scenario['name']}, seed {scenario['seed']}")
+             np.array(odom), np.concatenate(crowd) if crowd else np.zeros((0, 3)),
+             f"{scenario['name']}, seed {scenario['seed']}")
     return metrics

@@ -73,7 +73,7 @@ def _pos(a, n: int, name: str) -> np.ndarray:
 
 
 def _lookup(keys_sorted: np.ndarray, values: np.ndarray, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Look ``query`` up in a map given as sorted keys and aligned values: (found mask, values; junk where not found)."""
+    """Look ``query`` up in a map of sorted keys and aligned values: (found mask, values; junk where not found)."""
     if keys_sorted.size == 0 or query.size == 0:
         return np.zeros(query.size, bool), np.zeros(query.size, np.int64)
     p = np.searchsorted(keys_sorted, query)

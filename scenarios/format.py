@@ -133,7 +133,8 @@ LASER = Schema({
     "resolution_deg": F("float", 0.5, min=0.0, exclusive_min=True, doc="deg between beams (SICK LMS500)"),
     "range_max": F("float", 20.0, min=0.0, exclusive_min=True, doc="m (seed 000: detections up to 20 m)"),
     "rate": F("float", 25.0, min=0.0, exclusive_min=True, doc="Hz (SICK LMS500: 25 or 50 Hz)"),
-    "noise_sigma": F("float", 0.012, min=0.0, doc="m, 1-sigma Gaussian range noise, of the order of the SICK LMS5xx statistical error (~1 cm)"),
+    "noise_sigma": F("float", 0.012, min=0.0,
+                     doc="m, 1-sigma Gaussian range noise, of the order of the SICK LMS5xx statistical error (~1 cm)"),
 })
 
 DETECTOR = Schema({
@@ -141,7 +142,8 @@ DETECTOR = Schema({
     "min_points": F("int", 3, min=1, doc="seed 000 Sec. IV-C: far echoes of fewer than 3 points are unreliable"),
     "min_width": F("float", 0.1, min=0.0, doc="m, narrowest segment taken for a person"),
     "max_width": F("float", 0.9, min=0.0, doc="m, widest segment taken for a person"),
-    "min_bulge": F("float", 0.03, min=0.0, doc="m, least mean depth of the interior points behind the chord (walls are flat)"),
+    "min_bulge": F("float", 0.03, min=0.0,
+                   doc="m, least mean depth of the interior points behind the chord (walls are flat)"),
     "position_variance": F("float", 0.1, min=0.0, exclusive_min=True,
                            doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)"),
 })
@@ -179,7 +181,8 @@ SCENARIO = Schema({
     "description": F("str", "", doc="what happens, in a sentence or two (its first line is listed)"),
     "seed": F("int", 0, min=0, doc="seeds every random draw: same seed, same run, bit for bit"),
     "duration": F("float", 60.0, min=0.0, exclusive_min=True, doc="s of simulated time that are recorded"),
-    "warmup": F("float", 0.0, min=0.0, doc="s of crowd-only simulation before the robot, sensors and scoring start, so flows are under way"),
+    "warmup": F("float", 0.0, min=0.0,
+                doc="s of crowd-only simulation before the robot, sensors and scoring start, so flows are under way"),
     "dt": F("float", 0.04, min=0.0, exclusive_min=True, max=0.1, doc="s, simulation step"),
     "map": F(MAP, doc="the floor plan"),
     "crowd": F(CROWD, doc="the social-force model and the agent types"),

@@ -35,7 +35,8 @@ def resolve(name_or_path: str) -> Path:
     if bundled.is_file():
         return bundled
     names = ", ".join(bundled_scenarios())
-    raise ScenarioError(name_or_path, "<scenario>", f"not a bundled scenario, a YAML file nor a PedSim XML file; bundled: {names}")
+    raise ScenarioError(name_or_path, "<scenario>",
+                        f"not a bundled scenario, a YAML file nor a PedSim XML file; bundled: {names}")
 
 
 def merge(base: dict, changes: dict) -> dict:
@@ -74,8 +75,8 @@ def read_raw(path: Path, seen: tuple = ()) -> dict:
 
 
 def load_scenario(name_or_path: str, **overrides) -> dict:
-    """The validated scenario as plain data, defaults filled in; ``overrides`` replace top-level keys. A ``.xml`` path is
-    read as a PedSim scenario (``scenarios.pedsim``)."""
+    """The validated scenario as plain data, defaults filled in; ``overrides`` replace top-level keys. A ``.xml``
+    path is read as a PedSim scenario (``scenarios.pedsim``)."""
     path = resolve(name_or_path)
     if path.suffix.lower() == ".xml":
         from .pedsim import pedsim_to_scenario  # pedsim builds on this module
