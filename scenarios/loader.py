@@ -15,12 +15,13 @@ BUNDLED = Path(__file__).parent / "bundled"
 
 
 def bundled_scenarios() -> dict[str, str]:
-    """Bundled scenario name -> the first line of its description."""
+    """Bundled scenario name -> the first sentence of its description."""
     out = {}
     for path in sorted(BUNDLED.glob("*.yaml")):
         with open(path) as f:
             description = (yaml.safe_load(f) or {}).get("description", "")
-        out[path.stem] = description.strip().split("\n")[0]
+        first = description.strip().split("\n")[0]
+        out[path.stem] = first.split(". ")[0].rstrip(".") + "."
     return out
 
 

@@ -69,7 +69,7 @@ def test_scenarios_lists_bundled_with_description():
     assert result.returncode == 0, result.stderr
     lines = {line.split()[0]: line for line in result.stdout.splitlines() if line.strip()}
     description = bundled_scenarios()["airport_disembarkation"]
-    assert description.startswith("Passengers leave an aircraft door")
+    assert description.startswith("Passengers leave an aircraft through a jet bridge")
     assert "airport_disembarkation" in lines
     assert lines["airport_disembarkation"].split(None, 1)[1] == description
 
