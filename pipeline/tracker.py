@@ -245,10 +245,6 @@ class NearestNeighbourTracker:
         """Tracks held, tentative ones included."""
         return int(self._id.size)
 
-    @property
-    def num_confirmed(self) -> int:
-        return int(np.count_nonzero(self._confirmed))
-
     # -- one cycle ----------------------------------------------------------------------------------------------
 
     def update(self, stamp: float, detections: DetectedPersons) -> TrackedPersons:
