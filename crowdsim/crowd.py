@@ -130,6 +130,8 @@ class Crowd:
         self.goal_radius = np.zeros(n)
         self.walked = np.zeros(n)
         self.slow_time = np.zeros(n)  # s spent walking at under a fifth of the desired speed
+        self.escape = np.zeros((n, 2))  # direction of a walker sliding along a wall to get unstuck, else 0
+        self.squeeze_until = np.zeros(n)  # a stuck walker ignores the walls' social repulsion until then (s)
         self.queued = np.zeros(n, np.int64)  # the queue a person stands in, -1 for none
         self.visiting = np.zeros(n, np.int64)  # the attraction a person is visiting, -1 for none
         self.visit_end = np.zeros(n)
@@ -141,7 +143,15 @@ class Crowd:
             kind = np.full(c["count"], self.type_names.index(c["agent_type"]))
             pos = np.asarray(c["position"]) + self.rng.uniform(-0.5, 0.5, (c["count"], 2)) * c["spread"]
             k = self.route_names.index(c["route"])
-            self._append(pos, self._desired_speeds(kind), kind, -1, k, np.repeat(self.route_goal[k, :1], c["count"], 0),
+            group = self._divide_into_groups(c)
+            v0 = self._desired_speeds(kind)
+            grouped = np.flatnonzero(group >= 0)
+            if len(grouped):  # a group walks at the pace of its slowest member
+                _, member_of = np.unique(group[grouped], return_inverse=True)
+                slowest = np.full(member_of.max() + 1, np.inf)
+                np.minimum.at(slowest, member_of, v0[grouped])
+                v0[grouped] = slowest[member_of]
+            self._append(pos, v0, kind, group, k, np.repeat(self.route_goal[k, :1], c["count"], 0),
                          np.full(c["count"], self.route_radius[k, 0]))
 
     # -- population ---------------------------------------------------------------------------------------------
@@ -171,6 +181,8 @@ class Crowd:
         self.goal_radius = np.concatenate([self.goal_radius, goal_radius])
         self.walked = np.concatenate([self.walked, np.zeros(n)])
         self.slow_time = np.concatenate([self.slow_time, np.zeros(n)])
+        self.escape = np.concatenate([self.escape, np.zeros((n, 2))])
+        self.squeeze_until = np.concatenate([self.squeeze_until, np.zeros(n)])
         self.queued = np.concatenate([self.queued, np.full(n, -1, np.int64)])
         self.visiting = np.concatenate([self.visiting, np.full(n, -1, np.int64)])
         self.visit_end = np.concatenate([self.visit_end, np.zeros(n)])
@@ -187,6 +199,16 @@ class Crowd:
         self._append(np.asarray(positions, float), v0, kind, self._new_group_id(n) if group else -1, k,
                      np.repeat(self.route_goal[k, :1], n, 0), np.full(n, self.route_radius[k, 0]))
         return self.id[-n:].copy()
+
+    def _divide_into_groups(self, cluster: dict) -> np.ndarray:
+        """Group ids for a cluster's persons, in order: sizes drawn from its weights until all have one, the last
+        group cut to the persons left (as PedSim divides a cluster)."""
+        w = np.asarray(cluster["group_size_weights"], float)
+        ids = []
+        while len(ids) < cluster["count"]:
+            size = min(1 + int(self.rng.choice(w.size, p=w / w.sum())), cluster["count"] - len(ids))
+            ids += [self._new_group_id(size)] * size
+        return np.array(ids, np.int64)
 
     def _new_group_id(self, size: int) -> int:
         if size < 2:
@@ -254,7 +276,7 @@ class Crowd:
         self.contacts.keep(keep)
         for name in ("id", "pos", "vel", "v0", "kind", "radius", "group", "route", "wp", "goal", "goal_radius",
                      "walked",
-                     "slow_time", "queued", "visiting", "visit_end", "visited"):
+                     "slow_time", "escape", "squeeze_until", "queued", "visiting", "visit_end", "visited"):
             setattr(self, name, getattr(self, name)[keep])
 
     @property
@@ -350,25 +372,46 @@ class Crowd:
     # -- forces -------------------------------------------------------------------------------------------------
 
     def desired_direction(self) -> tuple[np.ndarray, np.ndarray]:
-        """Unit vectors towards the current goals and the desired speeds (standing people slow to their spot).
-
-        A walker held at a wall for ``stuck_time`` (a goal round a corner pins it there) slides along the wall
-        instead, towards the side nearer its goal, until it walks freely again (the escape PedSim lacks).
-        """
+        """Unit vectors towards the current goals (or along the wall for walkers escaping one, see
+        ``_update_escapes``) and the desired speeds (standing people slow to their spot)."""
         to_goal = self.goal - self.pos
         dist = np.linalg.norm(to_goal, axis=1)
         e = to_goal / np.maximum(dist, 1e-9)[:, None]
         speed = np.where(self.holding, self.v0 * np.clip(dist / ARRIVAL_RADIUS, 0.0, 1.0), self.v0)
-        stuck = np.flatnonzero(self.slow_time >= self.p["stuck_time"])
-        if len(stuck) and len(self.walls):
-            away, d = closest_on_segments(self.pos[stuck], self.walls)
-            k = np.argmin(d, axis=1)
-            touching = d[np.arange(len(stuck)), k] < self.radius[stuck] + 0.3
-            seg = self.walls[k, 1] - self.walls[k, 0]
-            tangent = seg / np.maximum(np.linalg.norm(seg, axis=1), 1e-9)[:, None]
-            tangent *= np.where(np.einsum("ij,ij->i", tangent, e[stuck]) >= 0, 1.0, -1.0)[:, None]
-            e[stuck[touching]] = tangent[touching]
+        escaping = self.escape.any(axis=1)
+        e[escaping] = self.escape[escaping]
         return e, speed
+
+    def _update_escapes(self):
+        """The escape from walls and corners that PedSim lacks.
+
+        A walker held at a wall for ``stuck_time`` while a wall hides its goal (the social forces balance there)
+        slides along the wall towards the side nearer its goal, and keeps sliding until the wall no longer hides
+        the goal; one stuck again while sliding (a dead end) turns round. One held although it sees its goal (a
+        slow walker before a narrow door, where the repulsion of the door's two edges outweighs its drive)
+        ignores the walls' social repulsion for ``stuck_time`` and squeezes through: contacts still keep its body
+        out of the walls.
+        """
+        escaping = np.flatnonzero(self.escape.any(axis=1))
+        clear = ~segments_cross(self.pos[escaping], self.goal[escaping], self.walls) | self.holding[escaping]
+        self.escape[escaping[clear]] = 0.0
+        stuck = np.flatnonzero(self.slow_time >= self.p["stuck_time"])
+        if len(stuck) == 0 or len(self.walls) == 0:
+            return
+        self.slow_time[stuck] = 0.0
+        turning = self.escape[stuck].any(axis=1)
+        self.escape[stuck[turning]] *= -1.0
+        stuck = stuck[~turning]
+        hidden = segments_cross(self.pos[stuck], self.goal[stuck], self.walls)
+        self.squeeze_until[stuck[~hidden]] = self.t + self.p["stuck_time"]
+        start = stuck[hidden]
+        _, d = closest_on_segments(self.pos[start], self.walls)
+        k = np.argmin(d, axis=1)
+        touching = d[np.arange(len(start)), k] < self.radius[start] + 0.3
+        seg = self.walls[k, 1] - self.walls[k, 0]
+        tangent = seg / np.maximum(np.linalg.norm(seg, axis=1), 1e-9)[:, None]
+        tangent *= np.where(np.einsum("ij,ij->i", tangent, self.goal[start] - self.pos[start]) >= 0, 1.0, -1.0)[:, None]
+        self.escape[start[touching]] = tangent[touching]
 
     def interaction_forces(self, e: np.ndarray) -> np.ndarray:
         """The configured agent-agent force over neighbour pairs from a k-d tree (O(N log N), not O(N^2))."""
@@ -388,14 +431,15 @@ class Crowd:
         return forces.helbing_molnar1995(self.pos, self.vel, e, i, j, p["agent_strength"], p["agent_range"],
                                          p["step_time"], p["fov_deg"], p["out_of_view_weight"])
 
-    def acceleration(self, robot_pos: np.ndarray | None, robot_radius: float) -> np.ndarray:
-        """The sum of every force term on every agent."""
+    def acceleration(self, e: np.ndarray, speed: np.ndarray, robot_pos: np.ndarray | None,
+                     robot_radius: float) -> np.ndarray:
+        """The sum of every force term on every agent, walking in directions ``e`` at desired ``speed``."""
         p = self.p
-        e, speed = self.desired_direction()
         acc = forces.desired_force(e, speed, self.vel, p["relaxation_time"])
         acc += self.interaction_forces(e)
         acc += forces.wall_force(self.pos, self.radius, e, self.walls, p["wall_strength"], p["wall_range"],
-                                 p["wall_interaction_range"], p["fov_deg"], p["out_of_view_weight"])
+                                 p["wall_interaction_range"], p["fov_deg"], p["out_of_view_weight"]
+                                 ) * (self.t >= self.squeeze_until)[:, None]
         walking_groups = np.where(self.holding, -1, self.group)
         acc += forces.group_forces(self.pos, self.vel, e, self.radius, walking_groups, p["group_gaze"],
                                    p["group_coherence"], p["group_repulsion"])
@@ -430,7 +474,14 @@ class Crowd:
     def step(self, dt: float, robot_pos: np.ndarray | None = None, robot_radius: float = 0.0) -> None:
         self._run_sources()
         if len(self.pos):
-            vel = self.vel + self.acceleration(robot_pos, robot_radius) * dt
+            e, speed = self.desired_direction()
+            vel = self.vel + self.acceleration(e, speed, robot_pos, robot_radius) * dt
+            # The field-of-view weighting makes the forces from those ahead outweigh those from behind, so in a
+            # jam the net force points backwards and a whole crowd would walk backwards. Pressure from ahead
+            # stops a walker; it does not make them walk backwards (contacts still push bodies physically).
+            along = np.einsum("ij,ij->i", vel, e)
+            back = ~self.holding & (along < 0)
+            vel[back] -= along[back, None] * e[back]
             vmax = self.p["max_speed_factor"] * self.v0
             s = np.linalg.norm(vel, axis=1)
             vel *= np.minimum(1.0, vmax / np.maximum(s, 1e-9))[:, None]
@@ -449,6 +500,7 @@ class Crowd:
             self.walked += speed * dt
             slow = ~self.holding & (speed < 0.2 * self.v0)
             self.slow_time = np.where(slow, self.slow_time + dt, 0.0)
+            self._update_escapes()
         self._robot_pos = None if robot_pos is None else np.array(robot_pos, float)
         self.t += dt
         self._advance_stages(dt)

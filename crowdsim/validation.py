@@ -321,7 +321,7 @@ def _ring_scenario(centre_radius: float, width: float, segments: int, lookahead:
 def ring_run(density: float, quick: bool = False, seed: int = 0, params: dict | None = None) -> dict:
     """Persons at ``density`` (persons/m^2 of the ring's floor) walking round the ring; their mean speed along it."""
     if quick:
-        R, W, segments, warmup, measure = 5.0, 2.5, 64, 10.0, 10.0
+        R, W, segments, warmup, measure = 10.0, 4.0, 128, 10.0, 10.0
     else:
         R, W, segments, warmup, measure = 10.0, 4.0, 128, 20.0, 20.0
     sc, region, area, (lo, hi), r_wp, lookahead, count = _ring_scenario(R, W, segments, W + 0.5, params=params)

@@ -46,7 +46,9 @@ CROWD = Schema({
     "wall_range": F("float", 0.08, min=0.0, exclusive_min=True,
                     doc="m, B, decay length of the wall force (Helbing, Farkas & Vicsek 2000)"),
     "fov_deg": F("float", 200.0, min=0.0, max=360.0, doc="deg, 2 phi of the anisotropic weighting (HM 1995)"),
-    "out_of_view_weight": F("float", 0.5, min=0.0, max=1.0, doc="c, weight of forces from behind (HM 1995)"),
+    "out_of_view_weight": F("float", 0.46, min=0.0, max=1.0,
+                            doc="c, weight of forces from behind (HM 1995 use 0.5; 0.46 puts the RiMEA 4 ring "
+                                "within 20% of Weidmann from 0.5 to 3 persons/m^2)"),
     "interaction_range": F("float", 5.0, min=0.0, exclusive_min=True, doc="m, neighbour search radius"),
     "wall_interaction_range": F("float", 2.0, min=0.0, exclusive_min=True, doc="m, walls nearer than this repel"),
     "group_gaze": F("float", 4.0, min=0.0, doc="beta_1, gaze term of walking groups (Moussaid et al. 2010)"),
@@ -57,7 +59,8 @@ CROWD = Schema({
                      doc="m, R of the robot's potential (the HM 1995 wall range: the robot is kept clear of)"),
     "random_force": F("float", 0.1, min=0.0, doc="m/s^2, std of a small random force per axis (0 turns it off)"),
     "stuck_time": F("float", 1.0, min=0.0, exclusive_min=True,
-                    doc="s, a walker this long at under a fifth of its desired speed by a wall slides along it"),
+                    doc="s, a walker this long at under a fifth of its desired speed slides along the wall that "
+                        "hides its goal, or squeezes past walls for this long when it sees its goal"),
     "max_agents": F("int", 400, min=1, doc="most persons alive at once (sources wait beyond it)"),
 })
 
@@ -87,6 +90,8 @@ CLUSTER = Schema({
     "spread": F("point", [0.0, 0.0], doc="m, width and height of the start area (PedSim dx, dy)"),
     "route": F("str", required=True, doc="the route they follow from the start"),
     "agent_type": F("str", "adult", doc="agent type of the persons"),
+    "group_size_weights": F(ListOf(F("float", min=0.0), min_items=1), [1.0],
+                            doc="relative weights of group sizes 1, 2, 3, ... the persons walk in"),
 })
 
 ROUTE = Schema({

@@ -72,6 +72,20 @@ from .format import CROWD, DEFAULT_AGENT_TYPES, ROBOT
 from .geometry import closest_on_segments
 from .schema import ScenarioError
 
+# pedsim_ros's default ``group_size_lambda``: it divides the persons of an <agent> or <source> into groups whose
+# sizes follow a Poisson distribution of this mean with size 0 redrawn
+GROUP_SIZE_LAMBDA = 1.1
+LARGEST_GROUP = 6  # sizes above this have probability < 0.1% at lambda 1.1 and are left out
+
+
+def zero_truncated_poisson(lam: float, largest: int) -> list[float]:
+    """P(size = k | size > 0) for k = 1 .. largest under Poisson(lam)."""
+    k = np.arange(1, largest + 1)
+    pmf = np.exp(-lam) * lam**k / np.array([math.factorial(int(i)) for i in k])
+    return (pmf / -math.expm1(-lam)).tolist()
+
+
+GROUP_SIZE_WEIGHTS = zero_truncated_poisson(GROUP_SIZE_LAMBDA, LARGEST_GROUP)
 SPAWN_PERIOD = 5.0  # s, pedsim_ros's default ``spawn_period``: a <source> adds n persons this often
 QUEUE_SERVICE_TIME = 1.0  # s, mean of pedsim_ros's Gamma(alpha=2, beta=0.5 s) wait at the head of a line
 BODY_CLEARANCE = max(t["radius"] for t in DEFAULT_AGENT_TYPES.values())  # m, what the loader asks of places
@@ -423,7 +437,8 @@ class _Converter:
                 standing += self.standing(g, agent_type)
             else:
                 clusters.append({"position": [float(c) for c in g.position], "count": g.count,
-                                 "spread": [float(c) for c in g.spread], "route": name, "agent_type": agent_type})
+                                 "spread": [float(c) for c in g.spread], "route": name, "agent_type": agent_type,
+                                 "group_size_weights": GROUP_SIZE_WEIGHTS})
         for g in self.sources:
             el = g.element
             agent_type = self.agent_type(g)
@@ -435,9 +450,11 @@ class _Converter:
                 self.warn(el, "has n=0: emits no persons")
                 continue
             clusters.append({"position": [float(c) for c in g.position], "count": g.count,
-                             "spread": [float(c) for c in g.spread], "route": name, "agent_type": agent_type})
+                             "spread": [float(c) for c in g.spread], "route": name, "agent_type": agent_type,
+                             "group_size_weights": GROUP_SIZE_WEIGHTS})
             sources.append({"position": self.fix(el, "position", g.position), "size": [float(c) for c in g.spread],
-                            "rate": g.count / SPAWN_PERIOD, "routes": {name: 1.0}, "agent_types": {agent_type: 1.0}})
+                            "rate": g.count / SPAWN_PERIOD, "routes": {name: 1.0}, "agent_types": {agent_type: 1.0},
+                            "group_size_weights": GROUP_SIZE_WEIGHTS})
         if robot is None:
             robot = self.parked_robot()
         raw = {

@@ -214,3 +214,56 @@ def test_attraction_draws_passers_by_then_lets_them_go(make_scenario, strength):
         assert top == pytest.approx(20.0, abs=1e-6)
     else:
         assert top > 21.5  # it walked to the edge of the shop area, y = 22
+
+
+def test_slow_walker_squeezes_through_a_door_it_fits(make_scenario):
+    # A 0.8 m door in a wall at x = 20. At 0.6 m/s the drive (0.6 / 0.5 s = 1.2 m/s^2) is weaker than the two door
+    # edges' repulsion 0.25 m off the doorway (2 x 25 exp(-0.24 / 0.08) x 0.58 = 1.4 m/s^2), so the social forces
+    # alone hold the walker before the door; after stuck_time (1 s) it ignores the walls' repulsion and passes,
+    # its body (0.5 m) still clear of both edges.
+    walls = [[[0, 0], [40, 0], [40, 40], [0, 40], [0, 0]], [[20, 0], [20, 19.6]], [[20, 20.4], [20, 40]]]
+    sc = make_scenario(walls=walls, **one_route((25, 20), radius=0.3, sink=True))
+    crowd = Crowd(sc, np.random.default_rng(0))
+    crowd.add_walkers(np.array([[17.0, 20.0]]), "r", desired_speed=0.6)
+    passed = None
+    for k in range(int(30 / DT)):
+        crowd.step(DT)
+        if len(crowd.pos) == 0:
+            break
+        _, d = closest_on_segments(crowd.pos, crowd.walls)
+        assert d.min() >= 0.25 - 1e-9
+        if passed is None and crowd.pos[0, 0] > 20.0:
+            passed = (k + 1) * DT
+    assert passed is not None and passed < 12.0
+    assert len(crowd.pos) == 0  # reached the goal behind the door
+
+
+def test_walker_whose_goal_a_wall_hides_slides_round_its_end(make_scenario):
+    # a free-standing partition from x = 14 to 26 at y = 20 lies between the walker and its goal straight behind
+    # it: the wall's repulsion balances the drive, so it stops there until it slides along the wall, past the
+    # end, and on to the goal
+    walls = [[[0, 0], [40, 0], [40, 40], [0, 40], [0, 0]], [[14, 20], [26, 20]]]
+    sc = make_scenario(walls=walls, **one_route((20.5, 25), radius=0.5, sink=True))
+    crowd = Crowd(sc, np.random.default_rng(0))
+    crowd.add_walkers(np.array([[20.0, 15.0]]), "r", desired_speed=1.2)
+    for _ in range(int(40 / DT)):
+        crowd.step(DT)
+        if len(crowd.pos) == 0:
+            break
+    assert len(crowd.pos) == 0
+
+
+def test_pressure_from_ahead_stops_a_walker_without_walking_it_backwards(make_scenario):
+    # a robot stands 2 m ahead; its repulsion (U/R = 10 / 0.2 = 50 m/s^2 at its rim) overwhelms the drive when the
+    # walker comes close: the walker stops short of it, never moving backwards along its way
+    sc = make_scenario(**one_route((30, 20), radius=0.3, sink=False))
+    crowd = Crowd(sc, np.random.default_rng(0))
+    crowd.add_walkers(np.array([[16.0, 20.0]]), "r", desired_speed=1.34)
+    robot, robot_radius = np.array([18.9, 20.0]), 0.425
+    along = []
+    for _ in range(int(5 / DT)):
+        crowd.step(DT, robot, robot_radius)
+        along.append(crowd.vel[0, 0])
+    assert min(along) >= -1e-9
+    assert crowd.pos[0, 0] < robot[0] - robot_radius - 0.25  # stopped short of the robot's body
+    assert abs(along[-1]) < 0.05

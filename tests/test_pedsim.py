@@ -10,7 +10,7 @@ from xml.etree import ElementTree
 import pytest
 
 from scenarios import ScenarioError, scenario_from_dict
-from scenarios.pedsim import PedsimWarning, load_pedsim, pedsim_to_scenario
+from scenarios.pedsim import GROUP_SIZE_WEIGHTS, PedsimWarning, load_pedsim, pedsim_to_scenario
 
 DATA = Path(__file__).parent / "data" / "pedsim"
 FILES = sorted(DATA.rglob("*.xml"))
@@ -72,9 +72,10 @@ def test_corridor():
     # the source: its first wave of 8 present from the start, then 8 persons per 5 s, to the sink 'west' (b="2")
     assert sc["routes"] == {"source_line23": {"waypoints": ["east", "west"], "sink": True}}
     assert sc["clusters"] == [{"position": [2, 5], "count": 8, "spread": [3, 5], "route": "source_line23",
-                               "agent_type": "adult"}]
+                               "agent_type": "adult", "group_size_weights": GROUP_SIZE_WEIGHTS}]
     [src] = sc["sources"]
     assert src["position"] == [2, 5] and src["size"] == [3, 5] and src["rate"] == pytest.approx(8 / 5)
+    assert src["group_size_weights"] == GROUP_SIZE_WEIGHTS
     assert src["routes"] == {"source_line23": 1.0} and src["agent_types"] == {"adult": 1.0}
     assert sc["standing"] == [] and sc["queues"] == {} and sc["attractions"] == {}
     assert sc["seed"] == 0 and sc["duration"] == 60.0
@@ -92,7 +93,7 @@ def test_singleagent():
         "robot_goal": ([22, 27], 2), "robot_start": ([4, 4], 2)}
     # the single agent (n="1", type 3) is one elder in a 1 m x 1 m area, looping between the two bookshop doors
     assert sc["clusters"] == [{"position": [6.8, 6.2], "count": 1, "spread": [1, 1], "route": "agent_line33",
-                               "agent_type": "elder"}]
+                               "agent_type": "elder", "group_size_weights": GROUP_SIZE_WEIGHTS}]
     assert sc["routes"] == {"agent_line33": {"waypoints": ["enter_bookshop", "leave_bookshop"], "sink": False}}
     assert sc["robot"]["start"][:2] == [2.5, 2.5]
     assert sc["robot"]["start"][2] == pytest.approx(math.pi / 4)  # towards robot_start (4, 4)
@@ -284,3 +285,32 @@ def test_every_pedsim_file_runs_in_the_crowd(name):
     if len(crowd.pos) and len(crowd.walls):
         _, d = closest_on_segments(crowd.pos, crowd.walls)
         assert (d - crowd.radius[:, None]).min() >= -1e-9
+
+
+def test_group_sizes_follow_pedsims_zero_truncated_poisson(tmp_path):
+    # pedsim_ros draws group sizes from Poisson(1.1), redrawing 0: P(k) = e^-1.1 1.1^k / k! / (1 - e^-1.1)
+    p1 = 1.1 * math.exp(-1.1) / (1 - math.exp(-1.1))
+    assert GROUP_SIZE_WEIGHTS[0] == pytest.approx(p1)  # 0.5489
+    assert GROUP_SIZE_WEIGHTS[1] == pytest.approx(p1 * 1.1 / 2)
+    assert GROUP_SIZE_WEIGHTS[2] == pytest.approx(p1 * 1.1**2 / 6)
+    assert sum(GROUP_SIZE_WEIGHTS) == pytest.approx(1.0, abs=1e-3)
+    path = write(tmp_path, ROOM + """\
+  <agent x="10" y="5" n="600" dx="10" dy="6" type="0"><addwaypoint id="a"/><addwaypoint id="b"/></agent>
+""")
+    sc, _ = quiet_load(path)
+    assert sc["clusters"][0]["group_size_weights"] == GROUP_SIZE_WEIGHTS
+    import numpy as np
+
+    from crowdsim.crowd import Crowd
+
+    crowd = Crowd(sc, np.random.default_rng(0))
+    singles = int((crowd.group < 0).sum())
+    sizes = np.unique(crowd.group[crowd.group >= 0], return_counts=True)[1]
+    groups = singles + len(sizes)
+    # 600 persons in about 600 / 1.649 = 364 groups; singles are 54.9% of the groups (sd about 2.6%)
+    assert singles + sizes.sum() == 600
+    assert singles / groups == pytest.approx(p1, abs=0.08)
+    assert 600 / groups == pytest.approx(1.1 / (1 - math.exp(-1.1)), rel=0.08)
+    # a group walks at the pace of its slowest member
+    for g in np.unique(crowd.group[crowd.group >= 0])[:20]:
+        assert np.ptp(crowd.v0[crowd.group == g]) == 0.0

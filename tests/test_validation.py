@@ -76,9 +76,7 @@ def test_rimea1_corridor_time(quick_run):
     assert c["passed"]
 
 
-# 2 and 3 persons/m^2 are not asserted here because the model does not meet them yet (2: too fast, 3: it either
-# flows or jams depending on the run); `crowdsim validate` reports them, and the open crowd issue tracks it
-@pytest.mark.parametrize("density", [0.5, 1.0])
+@pytest.mark.parametrize("density", [0.5, 1.0, 2.0, 3.0])
 def test_rimea4_speed_within_25_percent_of_weidmann(quick_run, density):
     runs = check(quick_run[1], "RiMEA 4 / Weidmann")["values"]["runs"]
     run = next(r for r in runs if r["density_target"] == density)
@@ -116,6 +114,8 @@ def test_bottleneck_flow_grows_with_width(quick_run):
     flows = [r["flow_p_s"] for r in runs]
     assert len(widths) >= 2 and widths == sorted(widths)
     assert all(b > a for a, b in zip(flows, flows[1:])), dict(zip(widths, flows))
+    # nobody is left clogged before the narrowest door
+    assert all(r["crossed"] == r["agents"] for r in runs), {r["width_m"]: r["crossed"] for r in runs}
 
 
 def test_no_body_inside_a_wall_in_any_run(quick_run):
