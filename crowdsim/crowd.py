@@ -130,7 +130,7 @@ class Crowd:
         self.goal_radius = np.zeros(n)
         self.walked = np.zeros(n)
         self.slow_time = np.zeros(n)  # s spent walking at under a fifth of the desired speed
-        self.escape = np.zeros((n, 2))  # direction of a walker sliding along a wall to get unstuck, else 0
+        self.escape = np.zeros(n)  # walkers following a wall to get unstuck: the side the wall is on (+-1), else 0
         self.squeeze_until = np.zeros(n)  # a stuck walker ignores the walls' social repulsion until then (s)
         self.queued = np.zeros(n, np.int64)  # the queue a person stands in, -1 for none
         self.visiting = np.zeros(n, np.int64)  # the attraction a person is visiting, -1 for none
@@ -181,7 +181,7 @@ class Crowd:
         self.goal_radius = np.concatenate([self.goal_radius, goal_radius])
         self.walked = np.concatenate([self.walked, np.zeros(n)])
         self.slow_time = np.concatenate([self.slow_time, np.zeros(n)])
-        self.escape = np.concatenate([self.escape, np.zeros((n, 2))])
+        self.escape = np.concatenate([self.escape, np.zeros(n)])
         self.squeeze_until = np.concatenate([self.squeeze_until, np.zeros(n)])
         self.queued = np.concatenate([self.queued, np.full(n, -1, np.int64)])
         self.visiting = np.concatenate([self.visiting, np.full(n, -1, np.int64)])
@@ -378,40 +378,51 @@ class Crowd:
         dist = np.linalg.norm(to_goal, axis=1)
         e = to_goal / np.maximum(dist, 1e-9)[:, None]
         speed = np.where(self.holding, self.v0 * np.clip(dist / ARRIVAL_RADIUS, 0.0, 1.0), self.v0)
-        escaping = self.escape.any(axis=1)
-        e[escaping] = self.escape[escaping]
+        escaping = np.flatnonzero(self.escape)
+        if len(escaping):
+            e[escaping] = self._along_nearest_wall(escaping, self.escape[escaping])
         return e, speed
+
+    def _along_nearest_wall(self, who: np.ndarray, side: np.ndarray) -> np.ndarray:
+        """Unit tangents of the nearest wall to each of ``who``, pointed so that the wall lies on ``side`` (+1: on
+        the right): following them walks round a wall's end and turns at concave corners (a bug algorithm)."""
+        away, d = closest_on_segments(self.pos[who], self.walls)
+        k = np.argmin(d, axis=1)
+        seg = self.walls[k, 1] - self.walls[k, 0]
+        tangent = seg / np.maximum(np.linalg.norm(seg, axis=1), 1e-9)[:, None]
+        a = away[np.arange(len(who)), k]
+        # the wall on the right: the tangent turned left (+90 degrees) points away from it
+        right = tangent[:, 0] * a[:, 1] - tangent[:, 1] * a[:, 0] > 0
+        return tangent * np.where(right == (side > 0), 1.0, -1.0)[:, None]
 
     def _update_escapes(self):
         """The escape from walls and corners that PedSim lacks.
 
-        A walker held at a wall for ``stuck_time`` while a wall hides its goal (the social forces balance there)
-        slides along the wall towards the side nearer its goal, and keeps sliding until the wall no longer hides
-        the goal; one stuck again while sliding (a dead end) turns round. One held although it sees its goal (a
-        slow walker before a narrow door, where the repulsion of the door's two edges outweighs its drive)
-        ignores the walls' social repulsion for ``stuck_time`` and squeezes through: contacts still keep its body
-        out of the walls.
+        A walker held for ``stuck_time`` while a wall hides its goal (the social forces balance there) follows the
+        walls, the nearest wall kept on one side (the one that starts it towards its goal), until none hides the
+        goal; one stuck again while following (a dead end, a crowd) keeps the wall on the other side instead. One
+        held although it sees its goal (a slow walker before a narrow door, where the repulsion of the door's two
+        edges outweighs its drive) ignores the walls' social repulsion for ``stuck_time`` and squeezes through:
+        contacts still keep its body out of the walls.
         """
-        escaping = np.flatnonzero(self.escape.any(axis=1))
+        escaping = np.flatnonzero(self.escape)
         clear = ~segments_cross(self.pos[escaping], self.goal[escaping], self.walls) | self.holding[escaping]
         self.escape[escaping[clear]] = 0.0
         stuck = np.flatnonzero(self.slow_time >= self.p["stuck_time"])
         if len(stuck) == 0 or len(self.walls) == 0:
             return
         self.slow_time[stuck] = 0.0
-        turning = self.escape[stuck].any(axis=1)
+        turning = self.escape[stuck] != 0
         self.escape[stuck[turning]] *= -1.0
         stuck = stuck[~turning]
         hidden = segments_cross(self.pos[stuck], self.goal[stuck], self.walls)
         self.squeeze_until[stuck[~hidden]] = self.t + self.p["stuck_time"]
         start = stuck[hidden]
-        _, d = closest_on_segments(self.pos[start], self.walls)
-        k = np.argmin(d, axis=1)
-        touching = d[np.arange(len(start)), k] < self.radius[start] + 0.3
-        seg = self.walls[k, 1] - self.walls[k, 0]
-        tangent = seg / np.maximum(np.linalg.norm(seg, axis=1), 1e-9)[:, None]
-        tangent *= np.where(np.einsum("ij,ij->i", tangent, self.goal[start] - self.pos[start]) >= 0, 1.0, -1.0)[:, None]
-        self.escape[start[touching]] = tangent[touching]
+        start = start[closest_on_segments(self.pos[start], self.walls)[1].min(axis=1) < self.radius[start] + 0.3]
+        if len(start):
+            right = self._along_nearest_wall(start, np.ones(len(start)))
+            towards_goal = np.einsum("ij,ij->i", right, self.goal[start] - self.pos[start]) >= 0
+            self.escape[start] = np.where(towards_goal, 1.0, -1.0)
 
     def interaction_forces(self, e: np.ndarray) -> np.ndarray:
         """The configured agent-agent force over neighbour pairs from a k-d tree (O(N log N), not O(N^2))."""

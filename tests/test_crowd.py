@@ -267,3 +267,15 @@ def test_pressure_from_ahead_stops_a_walker_without_walking_it_backwards(make_sc
     assert min(along) >= -1e-9
     assert crowd.pos[0, 0] < robot[0] - robot_radius - 0.25  # stopped short of the robot's body
     assert abs(along[-1]) < 0.05
+
+
+def test_wall_following_keeps_the_wall_on_its_side_round_a_corner(make_scenario):
+    # in the 40 m room, the wall y = 0 below: with it on the right a walker heads +x; near the corner (40, 0),
+    # where the wall x = 40 is nearer, it turns left and heads +y, the wall still on its right. With the walls on
+    # the left it heads -x along y = 0, and -y along x = 40 (towards the corner, where it turns right onto y = 0)
+    crowd = Crowd(make_scenario(**one_route((20, 20))), np.random.default_rng(0))
+    crowd.add_walkers(np.array([[20.0, 0.5], [39.6, 0.5]]), "r")
+    right = crowd._along_nearest_wall(np.arange(2), np.array([1.0, 1.0]))
+    left = crowd._along_nearest_wall(np.arange(2), np.array([-1.0, -1.0]))
+    assert right == pytest.approx(np.array([[1.0, 0.0], [0.0, 1.0]]))
+    assert left == pytest.approx(np.array([[-1.0, 0.0], [0.0, -1.0]]))
