@@ -5,7 +5,13 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import warnings
 from pathlib import Path
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings as one line naming what they concern (a PedSim file's element and line), not our source line."""
+    print(f"crowdsim: warning: {message}", file=sys.stderr if file is None else file)
 
 
 def _cmd_run(args) -> int:
@@ -116,11 +122,13 @@ def main(argv: list[str] | None = None) -> int:
     from .run import RunDirError
 
     args = build_parser().parse_args(argv)
-    try:
-        return args.func(args)
-    except (ScenarioError, RunDirError) as e:
-        print(f"crowdsim: error: {e}", file=sys.stderr)
-        return 2
+    with warnings.catch_warnings():  # restores the warning display on return
+        warnings.showwarning = _show_warning
+        try:
+            return args.func(args)
+        except (ScenarioError, RunDirError) as e:
+            print(f"crowdsim: error: {e}", file=sys.stderr)
+            return 2
 
 
 if __name__ == "__main__":

@@ -240,3 +240,16 @@ def test_validate_scenario_says_what_it_holds_or_names_the_fault(tmp_path, capsy
     assert main(["validate-scenario", str(bad)]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"crowdsim: error: {bad}: sources[0].rate: expected a value at least 0.0")
+
+
+def test_pedsim_warnings_print_as_one_line_naming_file_and_line(tmp_path, capsys):
+    path = tmp_path / "lift.xml"
+    path.write_text('<?xml version="1.0"?>\n<scenario>\n'
+                    '  <obstacle x1="0" y1="0" x2="20" y2="0"/>\n'
+                    '  <elevator id="lift" x="1" y="1"/>\n'
+                    '  <agent x="5" y="5" n="1" dx="0" dy="0" type="2"><addwaypoint id="a"/></agent>\n'
+                    '  <waypoint id="a" x="15" y="5" r="1"/>\n'
+                    '</scenario>\n')
+    assert main(["validate-scenario", str(path)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err == [f"crowdsim: warning: {path}:4: <elevator id='lift'> is not a PedSim scenario element; ignored"]
