@@ -428,7 +428,9 @@ class Crowd:
         """The configured agent-agent force over neighbour pairs from a k-d tree (O(N log N), not O(N^2))."""
         p = self.p
         n = len(self.pos)
-        pairs = (cKDTree(self.pos).query_pairs(p["interaction_range"], output_type="ndarray") if n > 1
+        # an unbalanced tree builds faster and queries no slower for crowds
+        tree = cKDTree(self.pos, balanced_tree=False, compact_nodes=False) if n > 1 else None
+        pairs = (tree.query_pairs(p["interaction_range"], output_type="ndarray") if n > 1
                  else np.zeros((0, 2), np.int64))
         if len(pairs) == 0:
             return np.zeros((n, 2))
