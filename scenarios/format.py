@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 
+from .laser_presets import LASER_PRESETS
 from .schema import Field, ListOf, MapOf, Schema
 
 F = Field
@@ -130,17 +131,29 @@ ROBOT = Schema({
     "odometry_noise": F("float", 0.0, min=0.0, doc="relative std of the odometry's speed error (0: perfect)"),
 })
 
+NOISE_BAND = Schema({
+    "up_to": F("float", required=True, min=0.0, exclusive_min=True, doc="m, the band covers ranges up to this"),
+    "systematic": F("float", 0.0, min=0.0,
+                    doc="m, +- bound of a fixed per-beam bias (drawn uniformly once per laser)"),
+    "statistical": F("float", 0.0, min=0.0, doc="m, 1-sigma Gaussian noise drawn anew for every return"),
+})
+
 LASER = Schema({
     "name": F("str", required=True, doc="the laser's frame name"),
+    "preset": F("str", None, choices=tuple(LASER_PRESETS),
+                doc="a datasheet model whose values fill the keys not given (scenarios/laser_presets.py)"),
     "mount": F("pose", required=True, doc="m, m, rad: pose in base_link"),
     "height": F("float", 0.70, min=0.0, doc="m above the floor (seed 000: two lasers at 70 cm)"),
     "fov_deg": F("float", 190.0, min=0.0, exclusive_min=True, max=360.0, doc="deg (SICK LMS500)"),
     "resolution_deg": F("float", 0.5, min=0.0, exclusive_min=True, doc="deg between beams (SICK LMS500)"),
+    "range_min": F("float", 0.0, min=0.0, doc="m, nearer returns are no-returns"),
     "range_max": F("float", 20.0, min=0.0, exclusive_min=True, doc="m (seed 000: detections up to 20 m)"),
     "rate": F("float", 25.0, min=0.0, exclusive_min=True, doc="Hz (SICK LMS500: 25 or 50 Hz)"),
-    "noise_sigma": F("float", 0.012, min=0.0,
-                     doc="m, 1-sigma Gaussian range noise, of the order of the SICK LMS5xx statistical error (~1 cm)"),
-})
+    "noise": F(ListOf(F(NOISE_BAND)), LASER_PRESETS["sick_lms500"]["noise"],
+               doc="range error bands, nearest first; beyond the last, the last applies (SICK LMS5xx HR)"),
+    "no_return": F("str", "nan", choices=("nan", "range_max"),
+                   doc="what a beam without a return reads: NaN, or range_max as many drivers report"),
+}, presets=LASER_PRESETS)
 
 DETECTOR = Schema({
     "jump_distance": F("float", 0.4, min=0.0, exclusive_min=True, doc="m, seed 000 Sec. 4.2: 0.4 m"),

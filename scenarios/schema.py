@@ -37,7 +37,11 @@ class Field:
 
 @dataclass(frozen=True)
 class Schema:
+    """A mapping's keys. With ``presets``, the key ``preset`` names a bundle of values (a sensor model, say) that
+    fills the keys the mapping leaves out, before the fields' own defaults."""
+
     fields: dict[str, Field]
+    presets: dict[str, dict] | None = None
 
 
 @dataclass(frozen=True)
@@ -124,6 +128,9 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
             k = unknown[0]
             raise ScenarioError(source, f"{key}.{k}" if key else str(k),
                                 f"unknown key; expected one of: {', '.join(spec.fields)}")
+        if spec.presets and value.get("preset") is not None:
+            name = validate(value["preset"], spec.fields["preset"], source, f"{key}.preset" if key else "preset")
+            value = {**spec.presets[name], **value}
         out = {}
         for name, field in spec.fields.items():
             sub = f"{key}.{name}" if key else name

@@ -1,4 +1,6 @@
-"""2D laser scanners ray-cast with MuJoCo: one batched ``mj_multiRay`` call per scan, Gaussian range noise."""
+"""2D laser scanners ray-cast with MuJoCo: one batched ``mj_multiRay`` call per scan, and the range error of the
+datasheets: a bias fixed per beam (the systematic error) plus Gaussian noise per return (the statistical error),
+both by range band (see scenarios/laser_presets.py)."""
 
 from __future__ import annotations
 
@@ -30,6 +32,12 @@ class Laser:
         self.angle_increment = fov / (self.n_beams if full_circle else self.n_beams - 1)
         self.angles = self.angle_min + self.angle_increment * np.arange(self.n_beams)
         self.period = 1.0 / params["rate"]
+        bands = params["noise"]
+        self._band_edges = np.array([b["up_to"] for b in bands[:-1]])
+        self._systematic = np.array([b["systematic"] for b in bands] or [0.0])
+        self._statistical = np.array([b["statistical"] for b in bands] or [0.0])
+        # where each beam's fixed bias lies within +- the systematic bound: drawn once, so a beam repeats its bias
+        self._bias_share = rng.uniform(-1.0, 1.0, self.n_beams)
         self._vec = np.zeros((self.n_beams, 3))
         self._dist = np.zeros(self.n_beams)
         self._geom = np.zeros(self.n_beams, np.int32)
@@ -48,10 +56,15 @@ class Laser:
         m, d = self.scene.model, self.scene.data
         mujoco.mj_multiRay(m, d, origin, self._vec.reshape(-1), None, 1, self.scene.robot_body, self._geom,
                            self._dist, None, self.n_beams, self.p["range_max"])
-        hit = (self._dist >= 0) & (self._dist <= self.p["range_max"])
-        ranges = np.where(hit, self._dist, np.nan)
-        if self.p["noise_sigma"] > 0:
-            ranges = ranges + self.rng.normal(0.0, self.p["noise_sigma"], self.n_beams)
-        ranges = np.where(hit, np.clip(ranges, 0.0, self.p["range_max"]), np.nan)
+        hit = (self._dist >= self.p["range_min"]) & (self._dist <= self.p["range_max"])
+        ranges = self._dist + self.range_error(self._dist)
+        ranges = np.where(hit, np.clip(ranges, self.p["range_min"], self.p["range_max"]),
+                          np.nan if self.p["no_return"] == "nan" else self.p["range_max"])
         person = np.where(hit, self.scene.person_of_geom(self._geom), -1)
         return LaserScan(stamp, self.name, self.angle_min, self.angle_increment, self.p["range_max"], ranges, person)
+
+    def range_error(self, true_range: np.ndarray) -> np.ndarray:
+        """Each beam's error at these true ranges: its fixed bias plus fresh Gaussian noise, by range band."""
+        band = np.searchsorted(self._band_edges, true_range)
+        noise = self.rng.standard_normal(self.n_beams) * self._statistical[band]
+        return noise + self._bias_share * self._systematic[band]
