@@ -71,7 +71,7 @@ def bench_laser(n_people: int, quick: bool) -> float:
     crowd, scenario = populated_crowd(n_people)
     scene = Scene(crowd.walls, 0.425, n_people)
     pose = np.array([HALL / 2, HALL / 2, 0.0])
-    scene.sync(pose, crowd.id, crowd.pos)
+    scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked)
     laser = Laser(scenario["sensors"]["lasers"][0], scene, np.random.default_rng(0))
     return _rate(lambda: laser.scan(0.0, pose), 50 if quick else 400)
 

@@ -126,7 +126,7 @@ class Simulation:
             self.timing.wall_s += t1 - t0
             return None
         agents = self.crowd.states()
-        self.scene.sync(self.robot.pose, agents.id, agents.position)
+        self.scene.sync(self.robot.pose, agents.id, agents.position, agents.velocity, agents.walked)
         scans, batches = [], []
         for k in due:
             self._next_scan[k] += self.lasers[k].period

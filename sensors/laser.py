@@ -41,6 +41,7 @@ class Laser:
         self._vec = np.zeros((self.n_beams, 3))
         self._dist = np.zeros(self.n_beams)
         self._geom = np.zeros(self.n_beams, np.int32)
+        self._groups = scene.groups_at(params["height"])  # only the body parts at the laser's height
 
     def pose_in(self, base_pose: np.ndarray) -> np.ndarray:
         """The laser's pose in the frame ``base_pose`` is given in."""
@@ -54,7 +55,7 @@ class Laser:
         self._vec[:, 1] = np.sin(a)
         origin = np.array([pose[0], pose[1], self.p["height"]])
         m, d = self.scene.model, self.scene.data
-        mujoco.mj_multiRay(m, d, origin, self._vec.reshape(-1), None, 1, self.scene.robot_body, self._geom,
+        mujoco.mj_multiRay(m, d, origin, self._vec.reshape(-1), self._groups, 1, self.scene.robot_body, self._geom,
                            self._dist, None, self.n_beams, self.p["range_max"])
         hit = (self._dist >= self.p["range_min"]) & (self._dist <= self.p["range_max"])
         ranges = self._dist + self.range_error(self._dist)

@@ -1,0 +1,120 @@
+"""The person body: legs that swing with the distance walked, seen by a laser at 38 cm (seed 001) as two legs that
+part and cross, and as one segment when the person stands; clothing colours that stay with the person."""
+
+import mujoco
+import numpy as np
+import pytest
+
+from scenarios.format import LASER
+from scenarios.schema import validate
+from sensors import body
+from sensors.laser import Laser
+from sensors.scene import Scene
+
+FAR_WALL = [[[10.0, -30.0], [10.0, 30.0]]]
+
+
+def leg_laser(scene):
+    # seed 001's leg laser: 180 degrees at 0.5 degrees, 38 cm above the floor; exact ranges
+    params = validate({"name": "leg_laser", "mount": [0.0, 0.0, 0.0], "height": 0.38, "fov_deg": 180.0,
+                       "resolution_deg": 0.5, "noise": []}, LASER, "<test>")
+    return Laser(params, scene, np.random.default_rng(0))
+
+
+def runs_on(scan, person_id):
+    """Maximal runs of consecutive beams that hit the person: the segments a jump-distance segmenter cuts out when
+    the background is far behind."""
+    on = np.concatenate([[0], (scan.person_id == person_id).astype(int), [0]])
+    return int((np.diff(on) == 1).sum())
+
+
+def test_feet_swing_forward_by_the_leg_length_times_the_sine_of_the_swing():
+    # a person at (2, 1) walking along +y (heading 90 deg) with the left leg swung by 20 deg: the left foot lies
+    # L sin(20 deg) ahead of its hip (+y), the right one as far behind; the hips are HIP_HALF_WIDTH to each side
+    scene = Scene(np.array(FAR_WALL), 0.425, 1)
+    swing = np.radians(20.0)
+    walked = np.arcsin(swing / body.SWING_AMPLITUDE) * body.STRIDE / (2 * np.pi)  # sin(phase) = swing / amplitude
+    scene.sync(np.array([-5.0, 0.0, 0.0]), np.array([1]), np.array([[2.0, 1.0]]), np.array([[0.0, 1.5]]),
+               np.array([walked]))
+    d, m = scene.data, scene.model
+    left, right = (m.body(f"person0_{side}_leg").id for side in ("left", "right"))
+    # the capsule's axis runs from the hip (the body origin) along the body's -z for LEG_LENGTH
+    foot = {b: d.xpos[b] - d.xmat[b].reshape(3, 3)[:, 2] * body.LEG_LENGTH for b in (left, right)}
+    reach = body.LEG_LENGTH * np.sin(swing)
+    np.testing.assert_allclose(d.xpos[left], [2.0 - body.HIP_HALF_WIDTH, 1.0, body.HIP_HEIGHT], atol=1e-9)
+    np.testing.assert_allclose(foot[left], [2.0 - body.HIP_HALF_WIDTH, 1.0 + reach,
+                                            body.HIP_HEIGHT - body.LEG_LENGTH * np.cos(swing)], atol=1e-9)
+    np.testing.assert_allclose(foot[right], [2.0 + body.HIP_HALF_WIDTH, 1.0 - reach,
+                                             body.HIP_HEIGHT - body.LEG_LENGTH * np.cos(swing)], atol=1e-9)
+
+
+def test_a_laser_at_38_cm_sees_two_legs_of_a_walker_for_most_of_the_cycle():
+    # a person 3 m ahead walks across the view (+y) at 1.34 m/s; over one stride, the legs show as two segments
+    # whenever they are apart by more than the beam spacing (2.6 cm at 3 m): the centres at 38 cm are
+    # 2 (0.87 - 0.38) sin(swing) apart, the legs 12 cm wide, so two segments need |swing| > ~8 degrees, i.e.
+    # |sin(phase)| > 0.34 of the 24.4-degree amplitude: about 78% of the cycle
+    scene = Scene(np.array(FAR_WALL), 0.425, 1)
+    laser = leg_laser(scene)
+    counts = []
+    for w in np.linspace(0.0, body.STRIDE, 200, endpoint=False):
+        scene.sync(np.zeros(3), np.array([5]), np.array([[3.0, 0.0]]), np.array([[0.0, 1.34]]), np.array([w]))
+        counts.append(runs_on(laser.scan(0.0, np.zeros(3)), 5))
+    counts = np.array(counts)
+    assert set(counts) <= {1, 2}
+    assert 0.65 <= (counts == 2).mean() <= 0.9
+    # mid-stance (phase 0 and pi: legs side by side, one behind the other as seen from the laser): one segment
+    assert counts[0] == 1 and counts[100] == 1
+
+
+@pytest.mark.parametrize("facing", [(1.0, 0.0), (0.0, 1.0), (0.7, 0.7)])
+def test_a_standing_person_is_one_segment_at_38_cm(facing):
+    # standing legs hang straight and touch: one segment whichever way the person faces (the heading comes from a
+    # vanishing velocity, which turns the body without swinging the legs)
+    scene = Scene(np.array(FAR_WALL), 0.425, 1)
+    laser = leg_laser(scene)
+    for walked in (0.0, 0.3, 0.9):
+        scene.sync(np.zeros(3), np.array([5]), np.array([[3.0, 0.4]]), 1e-9 * np.array([facing]), np.array([walked]))
+        assert runs_on(laser.scan(0.0, np.zeros(3)), 5) == 1
+
+
+def test_clothing_colours_stay_with_the_person_and_differ_between_neighbours():
+    scene = Scene(np.array(FAR_WALL), 0.425, 3)
+    scene.sync(np.zeros(3), np.array([10, 11, 12]), np.array([[2.0, 0.0], [3.0, 0.0], [4.0, 0.0]]))
+    g = scene.first_person_geom
+    torso = lambda slot: scene.model.geom_rgba[g + 4 * slot, :3].copy()  # noqa: E731
+    first = [torso(k) for k in range(3)]
+    assert not np.allclose(first[0], first[1]) and not np.allclose(first[1], first[2])
+    # id 11 moves to slot 0: its colours go with it
+    scene.sync(np.zeros(3), np.array([11]), np.array([[3.0, 0.0]]))
+    np.testing.assert_array_equal(torso(0), first[1])
+    assert scene.model.geom_rgba[g + 4:, 3].max() == 0.0  # the freed slots are parked and transparent
+
+
+def test_the_person_bodies_are_found_by_geom():
+    scene = Scene(np.array(FAR_WALL), 0.425, 2)
+    scene.sync(np.zeros(3), np.array([7, 8]), np.array([[2.0, 0.0], [4.0, 0.0]]))
+    geoms = scene.first_person_geom + np.arange(8)
+    np.testing.assert_array_equal(scene.person_of_geom(geoms), [7] * 4 + [8] * 4)
+    assert scene.person_of_geom(np.array([0, -1]))[0] == -1 and scene.person_of_geom(np.array([-1]))[0] == -1
+    assert mujoco.mj_name2id(scene.model, mujoco.mjtObj.mjOBJ_BODY, "person1_right_leg") >= 0
+
+
+def test_a_ray_cast_skips_only_parts_it_cannot_meet():
+    # at 70 cm the legs are inside the torso cylinder: casting against torsos alone gives the same ranges as
+    # casting against everything, over a whole gait cycle of a person in every direction around the laser
+    scene = Scene(np.array(FAR_WALL), 0.425, 8)
+    assert list(Scene.groups_at(0.70)) == [1, 1, 0, 0, 0, 0] and list(Scene.groups_at(0.38)) == [1, 0, 0, 1, 0, 0]
+    ang = np.linspace(0, 2 * np.pi, 8, endpoint=False)
+    xy = 1.5 * np.stack([np.cos(ang), np.sin(ang)], 1)
+    vel = 1.3 * np.stack([np.cos(ang + 1.0), np.sin(ang + 1.0)], 1)
+    vec = np.stack([np.cos(np.linspace(-np.pi, np.pi, 3600)), np.sin(np.linspace(-np.pi, np.pi, 3600)),
+                    np.zeros(3600)], 1).ravel()
+    for walked in np.linspace(0, body.STRIDE, 12, endpoint=False):
+        scene.sync(np.array([-20.0, 0.0, 0.0]), np.arange(8), xy, vel, np.full(8, walked))
+        out = {}
+        for key, groups in (("all", None), ("torsos", Scene.groups_at(0.70))):
+            geom, dist = np.zeros(3600, np.int32), np.zeros(3600)
+            mujoco.mj_multiRay(scene.model, scene.data, np.array([0.0, 0.0, 0.70]), vec, groups, 1, -1, geom, dist,
+                               None, 3600, 20.0)
+            out[key] = dist
+        np.testing.assert_array_equal(out["all"], out["torsos"])
