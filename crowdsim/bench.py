@@ -66,10 +66,10 @@ def bench_crowd(n_agents: int, quick: bool) -> float:
 
 
 def bench_laser(n_people: int, quick: bool) -> float:
-    from sensors import Laser, Scene
+    from sensors import Laser, Scene, parts_at
 
     crowd, scenario = populated_crowd(n_people)
-    scene = Scene(crowd.walls, 0.425, n_people)
+    scene = Scene(crowd.walls, 0.425, n_people, parts_at(scenario["sensors"]["lasers"][0]["height"]))
     pose = np.array([HALL / 2, HALL / 2, 0.0])
     scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked)
     laser = Laser(scenario["sensors"]["lasers"][0], scene, np.random.default_rng(0))

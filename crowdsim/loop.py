@@ -19,7 +19,7 @@ from pipeline.laser_detector import SegmentDetector
 from pipeline.tracker import NearestNeighbourTracker, TrackerParams
 from pipeline.types import DetectedPersons, LaserScan, TrackedPersons
 from scenarios.geometry import line_of_sight, wall_segments
-from sensors import Laser, Scene
+from sensors import Laser, Scene, parts_at
 
 from .crowd import AgentStates, Crowd
 from .robot import Robot
@@ -56,7 +56,8 @@ class Simulation:
     def __init__(self, scenario: dict):
         self.scenario = scenario
         self.walls = wall_segments(scenario)
-        self.scene = Scene(self.walls, scenario["robot"]["radius"], scenario["crowd"]["max_agents"])
+        seen = set().union(*(parts_at(laser["height"]) for laser in scenario["sensors"]["lasers"]))
+        self.scene = Scene(self.walls, scenario["robot"]["radius"], scenario["crowd"]["max_agents"], seen)
         self.max_range = scenario["evaluation"]["max_range"]
         self.dt = scenario["dt"]
         self.reset()

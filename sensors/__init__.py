@@ -1,6 +1,6 @@
 """The MuJoCo scene and the robot's sensors."""
 
 from .laser import Laser
-from .scene import Scene
+from .scene import Scene, parts_at
 
-__all__ = ["Laser", "Scene"]
+__all__ = ["Laser", "Scene", "parts_at"]

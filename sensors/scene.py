@@ -1,8 +1,9 @@
 """The MuJoCo scene: static walls and obstacles, the robot and a pool of person bodies moved as mocap bodies.
 
 No contact physics runs: bodies are placed every tick and MuJoCo is used for ray casting (and later rendering).
-A person is three mocap bodies (torso with head, left leg, right leg; see sensors/body.py). Slots beyond the number
-alive are parked below the floor and made transparent, which ray casting skips.
+A person is a torso body (with the head) and two leg bodies (see sensors/body.py). The scene holds only the parts
+its sensors can see (two 70 cm lasers see torsos only): MuJoCo's ray casting tests every geom of the model, so parts
+nobody sees would only cost time. Slots beyond the number alive are parked below the floor and made transparent.
 """
 
 from __future__ import annotations
@@ -17,11 +18,22 @@ WALL_THICKNESS = 0.1  # m
 PERSON_HIP_RADIUS = body.TORSO_RADIUS  # m, what the lasers at 0.70 m see
 ROBOT_HEIGHT = 1.6  # m
 PARKED_Z = -50.0
-GEOMS_PER_PERSON = 4  # torso, head, left leg, right leg (in this order)
-BODIES_PER_PERSON = 3  # torso (with the head), left leg, right leg
-# MuJoCo geom groups, so that a ray cast skips the parts a ray at its height cannot meet: a 70 cm laser tests the
-# torsos only, a 38 cm laser the legs only (a renderer must turn all groups on: MuJoCo shows 0-2 by default)
+PARTS = ("torso", "head", "legs")
+# MuJoCo geom groups, so that a ray cast skips the parts a ray at its height cannot meet (a renderer must turn all
+# groups on: MuJoCo shows groups 0-2 by default)
 STATIC_GROUP, TORSO_GROUP, HEAD_GROUP, LEG_GROUP = 0, 1, 2, 3
+
+
+def parts_at(height: float) -> set[str]:
+    """The body parts a horizontal ray at ``height`` above the floor can meet."""
+    parts = set()
+    if body.TORSO_BOTTOM <= height <= body.TORSO_TOP:
+        parts.add("torso")
+    if abs(height - body.HEAD_CENTRE) <= body.HEAD_RADIUS:
+        parts.add("head")
+    if body.legs_show_at(height):
+        parts.add("legs")
+    return parts
 
 
 def _segment_boxes(segs: np.ndarray) -> str:
@@ -37,25 +49,37 @@ def _segment_boxes(segs: np.ndarray) -> str:
     return "\n".join(xml)
 
 
-def _person_xml(k: int) -> str:
+def _person_xml(k: int, parts: set[str]) -> str:
     torso_half = (body.TORSO_TOP - body.TORSO_BOTTOM) / 2
-    leg = (f'<geom type="capsule" fromto="0 0 0 0 0 {-body.LEG_LENGTH:.4f}" size="{body.LEG_RADIUS}" '
-           f'group="{LEG_GROUP}" rgba=".2 .2 .3 1"/>')
-    return (f'<body name="person{k}" mocap="true" pos="0 0 {PARKED_Z}">'
-            f'<geom type="cylinder" size="{body.TORSO_RADIUS} {torso_half:.4f}" '
-            f'pos="0 0 {body.TORSO_BOTTOM + torso_half:.4f}" group="{TORSO_GROUP}" rgba=".8 .5 .3 1"/>'
-            f'<geom type="sphere" size="{body.HEAD_RADIUS}" pos="0 0 {body.HEAD_CENTRE}" group="{HEAD_GROUP}" '
-            f'rgba=".85 .68 .55 1"/></body>'
-            f'<body name="person{k}_left_leg" mocap="true" pos="0 0 {PARKED_Z}">{leg}</body>'
-            f'<body name="person{k}_right_leg" mocap="true" pos="0 0 {PARKED_Z}">{leg}</body>')
+    xml = f'<body name="person{k}" mocap="true" pos="0 0 {PARKED_Z}">'
+    if "torso" in parts:
+        xml += (f'<geom name="person{k}_torso" type="cylinder" size="{body.TORSO_RADIUS} {torso_half:.4f}" '
+                f'pos="0 0 {body.TORSO_BOTTOM + torso_half:.4f}" group="{TORSO_GROUP}" rgba=".8 .5 .3 1"/>')
+    if "head" in parts:
+        xml += (f'<geom name="person{k}_head" type="sphere" size="{body.HEAD_RADIUS}" pos="0 0 {body.HEAD_CENTRE}" '
+                f'group="{HEAD_GROUP}" rgba=".85 .68 .55 1"/>')
+    xml += "</body>"
+    if "legs" in parts:
+        for side in ("left", "right"):
+            xml += (f'<body name="person{k}_{side}_leg" mocap="true" pos="0 0 {PARKED_Z}">'
+                    f'<geom name="person{k}_{side}_leg" type="capsule" fromto="0 0 0 0 0 {-body.LEG_LENGTH:.4f}" '
+                    f'size="{body.LEG_RADIUS}" group="{LEG_GROUP}" rgba=".2 .2 .3 1"/></body>')
+    return xml
 
 
 class Scene:
-    """MuJoCo model and data of one scenario, with ``sync`` to place the people and the robot."""
+    """MuJoCo model and data of one scenario, with ``sync`` to place the people and the robot.
 
-    def __init__(self, walls: np.ndarray, robot_radius: float, capacity: int):
+    ``parts``: the body parts to build (all of PARTS by default); ``parts_at`` says which a laser needs.
+    """
+
+    def __init__(self, walls: np.ndarray, robot_radius: float, capacity: int, parts=PARTS):
+        unknown = set(parts) - set(PARTS)
+        if unknown:
+            raise ValueError(f"unknown body parts {sorted(unknown)}; expected some of {PARTS}")
         self.capacity = capacity
-        persons = "\n".join(_person_xml(k) for k in range(capacity))
+        self.parts = set(parts)
+        persons = "\n".join(_person_xml(k, self.parts) for k in range(capacity))
         xml = f"""<mujoco model="crowdsim">
   <option timestep="0.04"/>
   <worldbody>
@@ -66,16 +90,31 @@ class Scene:
     {persons}
   </worldbody>
 </mujoco>"""
-        self.model = mujoco.MjModel.from_xml_string(xml)
-        self.data = mujoco.MjData(self.model)
-        self.robot_body = self.model.body("robot").id
-        self.first_person_geom = self.model.body("person0").geomadr[0] if capacity else self.model.ngeom
-        self.robot_mocap = self.model.body_mocapid[self.robot_body]
-        self.person_mocap = self.model.body_mocapid[self.model.body("person0").id] if capacity else 0
+        m = self.model = mujoco.MjModel.from_xml_string(xml)
+        self.data = mujoco.MjData(m)
+        self.robot_body = m.body("robot").id
+        self.robot_mocap = m.body_mocapid[self.robot_body]
+
+        def mocap(name):
+            return np.array([m.body_mocapid[m.body(name.format(k)).id] for k in range(capacity)], np.int64)
+
+        def geoms(name):
+            return np.array([m.geom(name.format(k)).id for k in range(capacity)], np.int64)
+
+        self._torso_mocap = mocap("person{}")
+        self._leg_mocap = (np.stack([mocap("person{}_left_leg"), mocap("person{}_right_leg")], 1)
+                           if "legs" in self.parts else np.zeros((capacity, 0), np.int64))
+        self._geom = {part: geoms(f"person{{}}_{part}") for part in ("torso", "head") if part in self.parts}
+        if "legs" in self.parts:
+            self._geom["legs"] = np.stack([geoms("person{}_left_leg"), geoms("person{}_right_leg")], 1)
+        self._all_person_geoms = np.concatenate([g.reshape(capacity, -1) for g in self._geom.values()], 1) \
+            if self._geom else np.zeros((capacity, 0), np.int64)
+        self._geom_slot = np.full(m.ngeom + 1, -1, np.int64)  # the extra entry maps geom id -1 (no hit)
+        self._geom_slot[self._all_person_geoms] = np.arange(capacity)[:, None]
         self.slot_person_id = np.full(capacity, -1, np.int64)
-        self._person_geoms = slice(self.first_person_geom, self.first_person_geom + GEOMS_PER_PERSON * capacity)
-        self._person_bodies = slice(self.person_mocap, self.person_mocap + BODIES_PER_PERSON * capacity)
-        self.data.mocap_pos[self._person_bodies, 2] = PARKED_Z
+        self.data.mocap_pos[self._torso_mocap, 2] = PARKED_Z
+        self.data.mocap_pos[self._leg_mocap.ravel(), 2] = PARKED_Z
+        m.geom_rgba[self._all_person_geoms.ravel(), 3] = 0.0
 
     def sync(self, robot_pose: np.ndarray, person_ids: np.ndarray, person_xy: np.ndarray,
              person_velocity: np.ndarray | None = None, person_walked: np.ndarray | None = None) -> None:
@@ -92,25 +131,26 @@ class Scene:
         d.mocap_quat[self.robot_mocap] = (np.cos(robot_pose[2] / 2), 0.0, 0.0, np.sin(robot_pose[2] / 2))
         xy = np.asarray(person_xy, float).reshape(-1, 2)
         vel = np.zeros((n, 2)) if person_velocity is None else np.asarray(person_velocity, float)
-        walked = np.zeros(n) if person_walked is None else np.asarray(person_walked, float)
-        speed = np.linalg.norm(vel, axis=1)
         heading = np.arctan2(vel[:, 1], vel[:, 0])
-        hips, leg_quat = body.leg_poses(xy, heading, body.leg_swing(walked, speed))
-        pos = d.mocap_pos[self._person_bodies].reshape(self.capacity, BODIES_PER_PERSON, 3)
-        quat = d.mocap_quat[self._person_bodies].reshape(self.capacity, BODIES_PER_PERSON, 4)
-        pos[:n, 0, :2], pos[:n, 0, 2] = xy, 0.0
-        quat[:n, 0] = np.stack([np.cos(heading / 2), np.zeros(n), np.zeros(n), np.sin(heading / 2)], 1)
-        pos[:n, 1:], quat[:n, 1:] = hips, leg_quat
-        pos[n:] = (0.0, 0.0, PARKED_Z)
-        d.mocap_pos[self._person_bodies] = pos.reshape(-1, 3)
-        d.mocap_quat[self._person_bodies] = quat.reshape(-1, 4)
-        # clothing colours; MuJoCo's ray casting skips geoms with alpha 0, so parked slots cost nothing per beam
+        torso, parked = self._torso_mocap[:n], self._torso_mocap[n:]
+        d.mocap_pos[torso, :2], d.mocap_pos[torso, 2] = xy, 0.0
+        d.mocap_quat[torso] = np.stack([np.cos(heading / 2), np.zeros(n), np.zeros(n), np.sin(heading / 2)], 1)
+        d.mocap_pos[parked] = (0.0, 0.0, PARKED_Z)
+        if "legs" in self.parts:
+            walked = np.zeros(n) if person_walked is None else np.asarray(person_walked, float)
+            swing = body.leg_swing(walked, np.linalg.norm(vel, axis=1))
+            hips, leg_quat = body.leg_poses(xy, heading, swing)
+            legs = self._leg_mocap[:n]
+            d.mocap_pos[legs], d.mocap_quat[legs] = hips, leg_quat
+            d.mocap_pos[self._leg_mocap[n:].ravel()] = (0.0, 0.0, PARKED_Z)
+        # clothing colours; MuJoCo's ray casting skips geoms with alpha 0, so parked slots cost less per beam
         top, trousers = body.clothing(person_ids)
-        rgba = m.geom_rgba[self._person_geoms].reshape(self.capacity, GEOMS_PER_PERSON, 4)
-        rgba[:n, 0, :3], rgba[:n, 1, :3] = top, body.SKIN
-        rgba[:n, 2, :3], rgba[:n, 3, :3] = trousers, trousers
-        rgba[:n, :, 3], rgba[n:, :, 3] = 1.0, 0.0
-        m.geom_rgba[self._person_geoms] = rgba.reshape(-1, 4)
+        for part, colour in (("torso", top), ("head", body.SKIN), ("legs", trousers)):
+            if part in self._geom:
+                g = self._geom[part][:n]
+                m.geom_rgba[g, :3] = colour[:, None] if g.ndim == 2 else colour
+        m.geom_rgba[self._all_person_geoms[:n].ravel(), 3] = 1.0
+        m.geom_rgba[self._all_person_geoms[n:].ravel(), 3] = 0.0
         self.slot_person_id[:n] = person_ids
         self.slot_person_id[n:] = -1
         mujoco.mj_kinematics(m, d)
@@ -118,15 +158,13 @@ class Scene:
     @staticmethod
     def groups_at(height: float) -> np.ndarray:
         """The geom groups (MuJoCo's include mask) a horizontal ray at ``height`` above the floor can meet."""
+        parts = parts_at(height)
         mask = np.zeros(6, np.uint8)
         mask[STATIC_GROUP] = 1
-        mask[TORSO_GROUP] = body.TORSO_BOTTOM <= height <= body.TORSO_TOP
-        mask[HEAD_GROUP] = abs(height - body.HEAD_CENTRE) <= body.HEAD_RADIUS
-        mask[LEG_GROUP] = body.legs_show_at(height)
+        mask[TORSO_GROUP], mask[HEAD_GROUP], mask[LEG_GROUP] = ("torso" in parts), ("head" in parts), ("legs" in parts)
         return mask
 
     def person_of_geom(self, geom_id: np.ndarray) -> np.ndarray:
         """Ground-truth person id for each hit geom id (-1 for walls, the robot or no hit)."""
-        slot = (np.asarray(geom_id) - self.first_person_geom) // GEOMS_PER_PERSON
-        valid = (geom_id >= self.first_person_geom) & (slot < self.capacity)
-        return np.where(valid, self.slot_person_id[np.clip(slot, 0, max(self.capacity - 1, 0))], -1)
+        slot = self._geom_slot[np.asarray(geom_id)]  # geom id -1 picks the extra last entry, -1
+        return np.where(slot >= 0, self.slot_person_id[np.maximum(slot, 0)], -1)

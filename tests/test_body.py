@@ -9,7 +9,7 @@ from scenarios.format import LASER
 from scenarios.schema import validate
 from sensors import body
 from sensors.laser import Laser
-from sensors.scene import Scene
+from sensors.scene import Scene, parts_at
 
 FAR_WALL = [[[10.0, -30.0], [10.0, 30.0]]]
 
@@ -80,23 +80,45 @@ def test_a_standing_person_is_one_segment_at_38_cm(facing):
 def test_clothing_colours_stay_with_the_person_and_differ_between_neighbours():
     scene = Scene(np.array(FAR_WALL), 0.425, 3)
     scene.sync(np.zeros(3), np.array([10, 11, 12]), np.array([[2.0, 0.0], [3.0, 0.0], [4.0, 0.0]]))
-    g = scene.first_person_geom
-    torso = lambda slot: scene.model.geom_rgba[g + 4 * slot, :3].copy()  # noqa: E731
-    first = [torso(k) for k in range(3)]
+
+    def rgba(slot, part):
+        return scene.model.geom_rgba[scene.model.geom(f"person{slot}_{part}").id].copy()
+
+    first = [rgba(k, "torso")[:3] for k in range(3)]
     assert not np.allclose(first[0], first[1]) and not np.allclose(first[1], first[2])
-    # id 11 moves to slot 0: its colours go with it
+    assert np.allclose(rgba(0, "left_leg"), rgba(0, "right_leg"))  # one pair of trousers
+    # id 11 moves to slot 0: its colours go with it; the freed slots are parked and transparent
     scene.sync(np.zeros(3), np.array([11]), np.array([[3.0, 0.0]]))
-    np.testing.assert_array_equal(torso(0), first[1])
-    assert scene.model.geom_rgba[g + 4:, 3].max() == 0.0  # the freed slots are parked and transparent
+    np.testing.assert_array_equal(rgba(0, "torso")[:3], first[1])
+    for slot in (1, 2):
+        for part in ("torso", "head", "left_leg", "right_leg"):
+            assert rgba(slot, part)[3] == 0.0
 
 
 def test_the_person_bodies_are_found_by_geom():
     scene = Scene(np.array(FAR_WALL), 0.425, 2)
     scene.sync(np.zeros(3), np.array([7, 8]), np.array([[2.0, 0.0], [4.0, 0.0]]))
-    geoms = scene.first_person_geom + np.arange(8)
-    np.testing.assert_array_equal(scene.person_of_geom(geoms), [7] * 4 + [8] * 4)
-    assert scene.person_of_geom(np.array([0, -1]))[0] == -1 and scene.person_of_geom(np.array([-1]))[0] == -1
-    assert mujoco.mj_name2id(scene.model, mujoco.mjtObj.mjOBJ_BODY, "person1_right_leg") >= 0
+    geoms = [scene.model.geom(f"person{k}_{part}").id for k in (0, 1)
+             for part in ("torso", "head", "left_leg", "right_leg")]
+    np.testing.assert_array_equal(scene.person_of_geom(np.array(geoms)), [7] * 4 + [8] * 4)
+    np.testing.assert_array_equal(scene.person_of_geom(np.array([0, -1])), [-1, -1])  # a wall; no hit
+
+
+def test_a_scene_holds_only_the_parts_its_sensors_see():
+    # two 70 cm lasers see torsos only: one geom per person; a 38 cm laser, legs only
+    assert parts_at(0.70) == {"torso"} and parts_at(0.38) == {"legs"} and parts_at(1.62) == {"head"}
+    full, torsos = Scene(np.array(FAR_WALL), 0.425, 5), Scene(np.array(FAR_WALL), 0.425, 5, parts={"torso"})
+    assert full.model.ngeom - torsos.model.ngeom == 5 * 3
+    with pytest.raises(ValueError, match="unknown body parts"):
+        Scene(np.array(FAR_WALL), 0.425, 5, parts={"arms"})
+    # the torso-only scene gives a 70 cm laser the same scan as the full one
+    for scene in (full, torsos):
+        scene.sync(np.zeros(3), np.arange(5), np.array([[2.0, y] for y in (-2, -1, 0, 1, 2)]),
+                   np.full((5, 2), 1.0), np.linspace(0, 1, 5))
+    params = validate({"name": "l", "mount": [0.0, 0.0, 0.0], "noise": []}, LASER, "<test>")
+    a, b = (Laser(params, s, np.random.default_rng(0)).scan(0.0, np.zeros(3)) for s in (full, torsos))
+    np.testing.assert_array_equal(a.ranges, b.ranges)
+    np.testing.assert_array_equal(a.person_id, b.person_id)
 
 
 def test_a_ray_cast_skips_only_parts_it_cannot_meet():
