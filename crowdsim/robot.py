@@ -25,17 +25,36 @@ class Robot:
         return compose(self.pose, inverse(self.odom_pose))
 
     def step(self, v: float, omega: float, dt: float) -> None:
-        """Move by the command (clipped to the limits) with exact arc integration; integrate noisy odometry."""
-        v = float(np.clip(v, -self.p["max_speed"], self.p["max_speed"]))
-        omega = float(np.clip(omega, -self.p["max_angular_speed"], self.p["max_angular_speed"]))
+        """Move by the command, limited in speed and acceleration, with exact arc integration; integrate the
+        odometry with its errors."""
+        p = self.p
+        dv, dw = p["max_acceleration"] * dt, p["max_angular_acceleration"] * dt
+        v = float(np.clip(v, self.velocity[0] - dv, self.velocity[0] + dv))
+        omega = float(np.clip(omega, self.velocity[1] - dw, self.velocity[1] + dw))
+        v = float(np.clip(v, -p["max_speed"], p["max_speed"]))
+        omega = float(np.clip(omega, -p["max_angular_speed"], p["max_angular_speed"]))
         self.pose = compose(self.pose, arc(v, omega, dt))
-        sigma = self.p["odometry_noise"]
-        if sigma > 0:
-            v_m, w_m = v * (1 + sigma * self.rng.normal()), omega * (1 + sigma * self.rng.normal())
-        else:
-            v_m, w_m = v, omega
-        self.odom_pose = compose(self.odom_pose, arc(v_m, w_m, dt))
+        distance, turn = self.measured_motion(v * dt, omega * dt)
+        self.odom_pose = compose(self.odom_pose, arc(distance / dt, turn / dt, dt))
         self.velocity = np.array([v, omega])
+
+    def measured_motion(self, distance: float, turn: float) -> tuple[float, float]:
+        """What the wheel encoders report for a true step of ``distance`` (m) and ``turn`` (rad).
+
+        The usual odometry error model (Borenstein & Feng 1996; Thrun et al., Probabilistic Robotics Sec. 5.4):
+        systematic errors (a scale error on distance, a heading drift per metre) plus random errors whose variance
+        grows in proportion to the distance driven and the angle turned, so that the drift does not depend on the
+        time step.
+        """
+        o = self.p["odometry"]
+        d = distance * (1.0 + o["distance_scale_error"])
+        t = turn + o["yaw_drift"] * distance
+        if o["distance_noise"] > 0:
+            d += o["distance_noise"] * np.sqrt(abs(distance)) * self.rng.standard_normal()
+        yaw_var = o["yaw_noise"] ** 2 * abs(turn) + o["yaw_noise_per_distance"] ** 2 * abs(distance)
+        if yaw_var > 0:
+            t += np.sqrt(yaw_var) * self.rng.standard_normal()
+        return d, t
 
     def drive_command(self, front_clearance: float) -> tuple[float, float]:
         """(v, omega) towards the next route point; stop when something is nearer than the safety distance."""

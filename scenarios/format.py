@@ -120,6 +120,16 @@ STANDING = Schema({
     "agent_type": F("str", "adult", doc="agent type of the group's members"),
 })
 
+ODOMETRY = Schema({
+    "distance_scale_error": F("float", 0.0, min=-0.5, max=0.5,
+                              doc="relative error of the distance measured (a wheel radius off by this share)"),
+    "yaw_drift": F("float", 0.0, doc="rad/m, heading error per metre driven (wheels of unequal diameter)"),
+    "distance_noise": F("float", 0.0, min=0.0, doc="m/sqrt(m): the distance error's variance grows by this^2 per m"),
+    "yaw_noise": F("float", 0.0, min=0.0, doc="rad/sqrt(rad): heading error variance per radian turned"),
+    "yaw_noise_per_distance": F("float", 0.0, min=0.0,
+                                doc="rad/sqrt(m): heading error variance per metre driven"),
+})
+
 ROBOT = Schema({
     "start": F("pose", required=True, doc="m, m, rad: initial pose in the world frame"),
     "route": F("points", None, doc="m, waypoints the robot drives through"),
@@ -127,8 +137,10 @@ ROBOT = Schema({
     "radius": F("float", 0.425, min=0.0, exclusive_min=True, doc="m, footprint radius (SPENCER platform ~0.85 m wide)"),
     "max_speed": F("float", 0.6, min=0.0, doc="m/s"),
     "max_angular_speed": F("float", 1.0, min=0.0, doc="rad/s"),
+    "max_acceleration": F("float", 0.5, min=0.0, exclusive_min=True, doc="m/s^2 (an assumption for a ~1.5 m platform)"),
+    "max_angular_acceleration": F("float", 1.5, min=0.0, exclusive_min=True, doc="rad/s^2 (an assumption)"),
     "safety_distance": F("float", 0.6, min=0.0, doc="m, stop when a laser return is this close in front"),
-    "odometry_noise": F("float", 0.0, min=0.0, doc="relative std of the odometry's speed error (0: perfect)"),
+    "odometry": F(ODOMETRY, doc="wheel odometry's systematic and random errors (all 0: perfect odometry)"),
 })
 
 NOISE_BAND = Schema({

@@ -4,13 +4,16 @@ import numpy as np
 import pytest
 
 from crowdsim.robot import Robot, arc
+from scenarios.format import ROBOT
+from scenarios.schema import validate
 
 
 def params(**kw):
-    p = {"start": [0.0, 0.0, 0.0], "route": None, "loop": True, "radius": 0.425, "max_speed": 1.0,
-         "max_angular_speed": 2.0, "safety_distance": 0.6, "odometry_noise": 0.0}
-    p.update(kw)
-    return p
+    """The robot as a scenario gives it; accelerations effectively unlimited unless a test sets them."""
+    raw = {"start": [0.0, 0.0, 0.0], "max_speed": 1.0, "max_angular_speed": 2.0, "max_acceleration": 1e9,
+           "max_angular_acceleration": 1e9}
+    raw.update(kw)
+    return validate(raw, ROBOT, "<test>")
 
 
 def test_quarter_circle():
@@ -30,9 +33,56 @@ def test_limits_are_applied():
     assert arc(0.5, 1.0, 1.0) == pytest.approx([0.5 * np.sin(1.0), 0.5 * (1 - np.cos(1.0)), 1.0])
 
 
-def test_odometry_noise_drifts_and_world_T_odom_tracks_it():
+def test_acceleration_limits_ramp_the_speed():
+    # from rest, v = 1 m/s commanded at 0.5 m/s^2 and omega = 2 rad/s at 1.5 rad/s^2: after 1 s (25 steps)
+    # v = 0.5 m/s and omega = 1.5 rad/s; both then reach their commands (1 and 2) after 2 s and 1.33 s
+    robot = Robot(params(max_acceleration=0.5, max_angular_acceleration=1.5), np.random.default_rng(0))
+    for _ in range(25):
+        robot.step(1.0, 2.0, 0.04)
+    assert robot.velocity == pytest.approx([0.5, 1.5])
+    for _ in range(25):
+        robot.step(1.0, 2.0, 0.04)
+    assert robot.velocity == pytest.approx([1.0, 2.0])
+    robot.step(-1.0, 0.0, 0.04)  # braking is limited too
+    assert robot.velocity == pytest.approx([1.0 - 0.02, 2.0 - 0.06])
+
+
+def drive_straight(odometry: dict, metres: float = 10.0, seed: int = 0) -> Robot:
+    robot = Robot(params(odometry=odometry), np.random.default_rng(seed))
+    for _ in range(round(metres / 0.04)):
+        robot.step(1.0, 0.0, 0.04)
+    return robot
+
+
+def test_systematic_odometry_errors_bend_and_stretch_the_odometry_path():
+    # 10 m straight: a +2% scale error reads 10.2 m
+    robot = drive_straight({"distance_scale_error": 0.02})
+    assert robot.pose == pytest.approx([10.0, 0.0, 0.0], abs=1e-9)
+    assert robot.odom_pose == pytest.approx([10.2, 0.0, 0.0], abs=1e-9)
+    # a heading drift of 0.01 rad/m: odometry believes in an arc of 10 m turning by 0.1 rad, radius 100 m:
+    # (100 sin 0.1, 100 (1 - cos 0.1)) = (9.98334, 0.49958)
+    robot = drive_straight({"yaw_drift": 0.01})
+    assert robot.odom_pose == pytest.approx([100 * np.sin(0.1), 100 * (1 - np.cos(0.1)), 0.1], abs=1e-9)
+
+
+def test_random_odometry_errors_grow_with_the_square_root_of_the_distance():
+    # distance noise 0.05 m/sqrt(m) and heading noise 0.01 rad/sqrt(m) over 10 m: the odometry's distance error
+    # has sd 0.05 sqrt(10) = 0.158 m, its heading error sd 0.01 sqrt(10) = 0.0316 rad, whatever the step length;
+    # over 300 independent runs the sample sd is within about 3 x 4% of that
+    runs = [drive_straight({"distance_noise": 0.05, "yaw_noise_per_distance": 0.01}, seed=k).odom_pose
+            for k in range(300)]
+    runs = np.array(runs)
+    heading_err = runs[:, 2]
+    distance_err = np.hypot(runs[:, 0], runs[:, 1]) - 10.0
+    assert abs(distance_err.mean()) < 3 * 0.158 / np.sqrt(300)
+    assert distance_err.std(ddof=1) == pytest.approx(0.05 * np.sqrt(10), rel=0.13)
+    assert heading_err.std(ddof=1) == pytest.approx(0.01 * np.sqrt(10), rel=0.13)
+
+
+def test_noisy_odometry_drifts_and_world_T_odom_tracks_it():
     start = [3.0, -1.0, 0.3]
-    robot = Robot(params(start=start, odometry_noise=0.05), np.random.default_rng(0))
+    robot = Robot(params(start=start, odometry={"distance_noise": 0.05, "yaw_noise": 0.05}),
+                  np.random.default_rng(0))
     for _ in range(500):
         robot.step(0.8, 0.2, 0.04)
     # odom and world disagree after 20 s of noisy odometry, and world_T_odom maps one onto the other exactly
