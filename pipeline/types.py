@@ -41,6 +41,42 @@ class LaserScan:
 
 
 @dataclass
+class DepthFrame:
+    """One depth image of an RGB-D camera, in its optical frame (x right, y down, z forward).
+
+    ``depth`` [h, w] float32 is the z-depth in metres, NaN where the camera measured nothing. ``points`` [n, 3] are
+    the valid pixels back-projected, in the same frame. ``person_id`` [h, w] is the ground-truth id of the person
+    each pixel shows (-1 for none; simulation-only). ``rgb`` [h, w, 3] uint8 when the camera has colour.
+    """
+
+    stamp: float
+    frame: str
+    depth: np.ndarray
+    points: np.ndarray
+    person_id: np.ndarray
+    rgb: np.ndarray | None = None
+
+
+@dataclass
+class CameraFrame:
+    """One image of a fixed wall camera, with the ground truth of who is visible and where.
+
+    ``person_id`` [h, w] is the segmentation (-1 for none; simulation-only). Per visible person (rows of ``ids``):
+    ``boxes`` [n, 4] (u0, v0, u1, v1) around the visible pixels, ``full_boxes`` [n, 4] around the person as it
+    would show unoccluded, ``visible_fraction`` [n] of its unoccluded pixels that show.
+    """
+
+    stamp: float
+    frame: str
+    rgb: np.ndarray | None
+    person_id: np.ndarray
+    ids: np.ndarray
+    boxes: np.ndarray
+    full_boxes: np.ndarray
+    visible_fraction: np.ndarray
+
+
+@dataclass
 class DetectedPersons:
     """Detections of one detector (or one fusion stage) at one instant, in ``frame``."""
 

@@ -78,3 +78,13 @@ def leg_poses(xy: np.ndarray, heading: np.ndarray, swing: np.ndarray) -> tuple[n
     e, g = np.cos(-beta / 2), np.sin(-beta / 2)
     quats = np.stack([a * e, -d * g, a * g, d * e], -1)
     return hips, quats
+
+
+def feet(hips: np.ndarray, heading: np.ndarray, swing: np.ndarray) -> np.ndarray:
+    """The lower ends [n, 2, 3] of the leg capsules' axes that ``leg_poses`` gives."""
+    beta = np.stack([swing, -swing], 1)
+    forward = np.stack([np.cos(heading), np.sin(heading)], 1)[:, None, :]
+    out = hips.copy()
+    out[..., :2] += LEG_LENGTH * np.sin(beta)[..., None] * forward
+    out[..., 2] -= LEG_LENGTH * np.cos(beta)
+    return out

@@ -49,6 +49,18 @@ def _segment_boxes(segs: np.ndarray) -> str:
     return "\n".join(xml)
 
 
+def camera_xml(cam: dict) -> str:
+    """A MuJoCo camera at ``position`` [x, y, z] looking along ``yaw`` and down by ``pitch`` (rad), in its parent's
+    frame. MuJoCo's camera looks along its -z with y up: x = right, y = right x forward."""
+    yaw, pitch = cam["yaw"], cam["pitch"]
+    forward = np.array([np.cos(pitch) * np.cos(yaw), np.cos(pitch) * np.sin(yaw), -np.sin(pitch)])
+    right = np.array([np.sin(yaw), -np.cos(yaw), 0.0])
+    up = np.cross(right, forward)
+    axes = " ".join(f"{v:.9f}" for v in (*right, *up))
+    pos = " ".join(f"{v:.6f}" for v in cam["position"])
+    return f'<camera name="{cam["name"]}" pos="{pos}" xyaxes="{axes}" fovy="{cam["fovy_deg"]}"/>'
+
+
 def _person_xml(k: int, parts: set[str]) -> str:
     torso_half = (body.TORSO_TOP - body.TORSO_BOTTOM) / 2
     xml = f'<body name="person{k}" mocap="true" pos="0 0 {PARKED_Z}">'
@@ -71,21 +83,34 @@ class Scene:
     """MuJoCo model and data of one scenario, with ``sync`` to place the people and the robot.
 
     ``parts``: the body parts to build (all of PARTS by default); ``parts_at`` says which a laser needs.
+    ``robot_cameras`` ride on the robot (poses in base_link), ``wall_cameras`` stand in the world: dicts with
+    ``name``, ``position``, ``yaw``, ``pitch``, ``fovy_deg``, ``width`` and ``height``.
     """
 
-    def __init__(self, walls: np.ndarray, robot_radius: float, capacity: int, parts=PARTS):
+    def __init__(self, walls: np.ndarray, robot_radius: float, capacity: int, parts=PARTS,
+                 robot_cameras: tuple = (), wall_cameras: tuple = ()):
         unknown = set(parts) - set(PARTS)
         if unknown:
             raise ValueError(f"unknown body parts {sorted(unknown)}; expected some of {PARTS}")
         self.capacity = capacity
         self.parts = set(parts)
         persons = "\n".join(_person_xml(k, self.parts) for k in range(capacity))
+        cameras = [*robot_cameras, *wall_cameras]
+        width = max([c["width"] for c in cameras] + [640])
+        height = max([c["height"] for c in cameras] + [480])
+        # the floor (for cameras; horizontal laser rays never meet it) and a light from above; offscreen buffers as
+        # big as the biggest camera, no multisampling
         xml = f"""<mujoco model="crowdsim">
   <option timestep="0.04"/>
+  <visual><global offwidth="{width}" offheight="{height}"/><quality offsamples="0"/></visual>
   <worldbody>
+    <light directional="true" pos="0 0 10" dir="0.2 0.3 -1" castshadow="false"/>
+    <geom name="floor" type="plane" size="0 0 1" rgba=".75 .75 .72 1"/>
     {_segment_boxes(walls)}
+    {"".join(camera_xml(c) for c in wall_cameras)}
     <body name="robot" mocap="true" pos="0 0 0">
       <geom type="cylinder" size="{robot_radius} {ROBOT_HEIGHT / 2}" pos="0 0 {ROBOT_HEIGHT / 2}" rgba=".2 .3 .8 1"/>
+      {"".join(camera_xml(c) for c in robot_cameras)}
     </body>
     {persons}
   </worldbody>
@@ -112,6 +137,10 @@ class Scene:
         self._geom_slot = np.full(m.ngeom + 1, -1, np.int64)  # the extra entry maps geom id -1 (no hit)
         self._geom_slot[self._all_person_geoms] = np.arange(capacity)[:, None]
         self.slot_person_id = np.full(capacity, -1, np.int64)
+        self.alive = 0
+        self.person_xy = np.zeros((capacity, 2))
+        self.hips = np.zeros((capacity, 2, 3))  # hip joints and leg ends, kept for the cameras' silhouettes
+        self.feet = np.zeros((capacity, 2, 3))
         self.data.mocap_pos[self._torso_mocap, 2] = PARKED_Z
         self.data.mocap_pos[self._leg_mocap.ravel(), 2] = PARKED_Z
         m.geom_rgba[self._all_person_geoms.ravel(), 3] = 0.0
@@ -136,10 +165,12 @@ class Scene:
         d.mocap_pos[torso, :2], d.mocap_pos[torso, 2] = xy, 0.0
         d.mocap_quat[torso] = np.stack([np.cos(heading / 2), np.zeros(n), np.zeros(n), np.sin(heading / 2)], 1)
         d.mocap_pos[parked] = (0.0, 0.0, PARKED_Z)
+        walked = np.zeros(n) if person_walked is None else np.asarray(person_walked, float)
+        swing = body.leg_swing(walked, np.linalg.norm(vel, axis=1))
+        hips, leg_quat = body.leg_poses(xy, heading, swing)
+        self.alive = n
+        self.person_xy[:n], self.hips[:n], self.feet[:n] = xy, hips, body.feet(hips, heading, swing)
         if "legs" in self.parts:
-            walked = np.zeros(n) if person_walked is None else np.asarray(person_walked, float)
-            swing = body.leg_swing(walked, np.linalg.norm(vel, axis=1))
-            hips, leg_quat = body.leg_poses(xy, heading, swing)
             legs = self._leg_mocap[:n]
             d.mocap_pos[legs], d.mocap_quat[legs] = hips, leg_quat
             d.mocap_pos[self._leg_mocap[n:].ravel()] = (0.0, 0.0, PARKED_Z)
@@ -154,6 +185,8 @@ class Scene:
         self.slot_person_id[:n] = person_ids
         self.slot_person_id[n:] = -1
         mujoco.mj_kinematics(m, d)
+        if m.ncam:
+            mujoco.mj_camlight(m, d)  # camera poses, which mj_kinematics leaves alone
 
     @staticmethod
     def groups_at(height: float) -> np.ndarray:

@@ -1,7 +1,9 @@
 """Shared builders: small scenarios written as data, the way a user writes a YAML file."""
 
-import numpy as np
-import pytest
+import sensors  # noqa: F401  (first: it chooses MuJoCo's OpenGL backend before anything imports mujoco)
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 from scenarios import scenario_from_dict
 

@@ -1,0 +1,146 @@
+"""Cameras against hand-worked projections: the depth of a known plane, point clouds, Kinect noise, a wall camera's
+box of a person at a known position, visible fractions, and agreement of segmentation with laser hits."""
+
+import numpy as np
+import pytest
+
+from scenarios.format import LASER
+from scenarios.schema import validate
+from sensors import body
+from sensors.camera import (KINECT_BASELINE, KINECT_FOCAL_PX, KINECT_SUBPIXEL, DepthCamera, GLRenderer, Intrinsics,
+                            RaycastRenderer, WallCamera, camera_pose)
+from sensors.laser import Laser
+from sensors.scene import Scene
+
+WALL_X = [[[5.0, -30.0], [5.0, 30.0]]]  # its face towards the robot at x = 4.95
+DEPTH = {"name": "front_depth", "position": [0.45, 0.0, 1.2], "yaw": 0.0, "pitch": 0.0, "fovy_deg": 43.0,
+         "width": 160, "height": 120, "rate": 15.0, "range_min": 0.5, "range_max": 8.0, "noise": "none", "rgb": False}
+WALL_CAM = {"name": "wall_cam", "position": [0.0, 0.0, 3.0], "yaw": 0.0, "pitch": float(np.radians(30.0)),
+            "fovy_deg": 50.0, "width": 320, "height": 240, "rate": 10.0, "rgb": False}
+
+
+def depth_scene(walls=WALL_X, capacity=4, **camera):
+    cam = dict(DEPTH, **camera)
+    return Scene(np.array(walls, float), 0.425, capacity, robot_cameras=[cam]), cam
+
+
+def expected_depth(cam):
+    """z-depth of each pixel of a level camera at height h facing +x: the wall face 4.95 m ahead where the ray
+    meets it between the floor and the wall top (2.5 m), else the floor (z-depth h / (-v) for a ray (x, v, 1) with
+    v the downward slope), else nothing."""
+    k = Intrinsics(cam["width"], cam["height"], cam["fovy_deg"])
+    rays = k.pixel_directions()  # optical: x right, y down, z forward (= world +x here)
+    ahead = 4.95 - cam["position"][0]
+    h = cam["position"][2]
+    z_at_wall = h - ahead * rays[..., 1]  # height where the ray reaches the wall
+    floor_depth = np.where(rays[..., 1] > 0, h / np.maximum(rays[..., 1], 1e-12), np.inf)
+    return np.where((z_at_wall >= 0) & (z_at_wall <= 2.5), ahead, np.where(z_at_wall < 0, floor_depth, np.nan))
+
+
+@pytest.mark.parametrize("renderer", ["gl", "raycast"])
+def test_depth_of_a_known_plane_and_of_the_floor(renderer):
+    scene, cam = depth_scene()
+    scene.sync(np.zeros(3), np.zeros(0, np.int64), np.zeros((0, 2)))
+    camera = DepthCamera(cam, scene, np.random.default_rng(0))
+    if renderer == "raycast":
+        camera.renderer = RaycastRenderer(scene, camera.intrinsics, scene.robot_body)
+    else:
+        assert isinstance(camera.renderer, GLRenderer), "no GL context here: the raycast case covers the fallback"
+    frame = camera.capture(0.0)
+    expect = expected_depth(cam)
+    expect = np.where((expect >= 0.5) & (expect <= 8.0), expect, np.nan)
+    # rows on either side of the wall's foot and top may differ by the rasterization of one edge: compare the rest
+    got = frame.depth
+    same_valid = np.isfinite(got) == np.isfinite(expect)
+    assert same_valid.mean() > 0.97
+    both = np.isfinite(got) & np.isfinite(expect)
+    wall = both & (np.abs(expect - 4.5) < 1e-9)
+    assert wall.sum() > 5000
+    np.testing.assert_allclose(got[wall], 4.5, atol=1e-3)  # the plane 4.5 m ahead, to a millimetre
+    floor = both & ~wall
+    assert floor.sum() > 1000
+    np.testing.assert_allclose(got[floor], expect[floor], rtol=5e-3)
+
+
+def test_point_cloud_lies_on_the_wall():
+    scene, cam = depth_scene()
+    scene.sync(np.zeros(3), np.zeros(0, np.int64), np.zeros((0, 2)))
+    frame = DepthCamera(cam, scene, np.random.default_rng(0)).capture(0.0)
+    origin, rot = camera_pose(scene, cam["name"])
+    world = frame.points @ rot.T + origin
+    on_wall = np.abs(world[:, 0] - 4.95) < 1e-3
+    assert on_wall.sum() > 5000
+    # the others lie on the floor, z = 0
+    np.testing.assert_allclose(world[~on_wall, 2], 0.0, atol=0.02)
+    assert len(frame.points) == np.isfinite(frame.depth).sum()
+
+
+def test_kinect_noise_has_the_published_sigma_and_disparity_steps():
+    # at 4.5 m: sigma 1.425e-3 x 4.5^2 = 28.9 mm, and the depth is quantized where 8 f b / z is a whole number
+    scene, cam = depth_scene(noise="kinect", range_max=20.0)
+    scene.sync(np.zeros(3), np.zeros(0, np.int64), np.zeros((0, 2)))
+    frame = DepthCamera(cam, scene, np.random.default_rng(3)).capture(0.0)
+    wall = np.abs(expected_depth(cam) - 4.5) < 1e-9
+    z = frame.depth[wall & np.isfinite(frame.depth)]
+    steps = KINECT_SUBPIXEL * KINECT_FOCAL_PX * KINECT_BASELINE / z
+    np.testing.assert_allclose(steps, np.round(steps), atol=1e-3)
+    step = 4.5**2 / (KINECT_SUBPIXEL * KINECT_FOCAL_PX * KINECT_BASELINE)  # 58 mm between levels at 4.5 m
+    assert abs(z.mean() - 4.5) < 0.01
+    assert z.std() == pytest.approx(np.hypot(1.425e-3 * 4.5**2, step / np.sqrt(12)), rel=0.15)
+
+
+def test_wall_camera_box_of_a_person_is_its_projection_within_a_pixel():
+    # a person standing at (6, 0.5), seen from (0, 0, 3) looking +x 30 degrees down: the box around the visible
+    # pixels equals the box around the projection of the body's surface (torso cylinder, head sphere, legs)
+    scene = Scene(np.array(WALL_X) * 3, 0.425, 2, wall_cameras=[WALL_CAM])
+    scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([4]), np.array([[6.0, 0.5]]))
+    frame = WallCamera(WALL_CAM, scene).capture(0.0)
+    assert list(frame.ids) == [4]
+    origin, rot = camera_pose(scene, WALL_CAM["name"])
+    a = np.linspace(0, 2 * np.pi, 720)
+    ring = lambda c, r, z: np.stack([c[0] + r * np.cos(a), c[1] + r * np.sin(a), np.full_like(a, z)], 1)  # noqa: E731
+    surface = [ring((6.0, 0.5), body.TORSO_RADIUS, z) for z in (body.TORSO_BOTTOM, body.TORSO_TOP)]
+    for lat in np.linspace(-np.pi / 2, np.pi / 2, 181):  # the head
+        surface.append(ring((6.0, 0.5), body.HEAD_RADIUS * np.cos(lat), body.HEAD_CENTRE + body.HEAD_RADIUS * np.sin(lat)))
+    for side in (1, -1):  # straight legs: vertical capsules from the floor to the hip
+        for z in np.linspace(0.0, body.HIP_HEIGHT, 60):
+            surface.append(ring((6.0, 0.5 + side * body.HIP_HALF_WIDTH), body.LEG_RADIUS, z))
+    uv = Intrinsics(320, 240, 50.0).project((np.concatenate(surface) - origin) @ rot)
+    expect = [uv[:, 0].min(), uv[:, 1].min(), uv[:, 0].max(), uv[:, 1].max()]
+    np.testing.assert_allclose(frame.boxes[0], expect, atol=1.0)
+    np.testing.assert_allclose(frame.full_boxes[0], expect, atol=1.0)
+    assert frame.visible_fraction[0] == pytest.approx(1.0, abs=0.03)
+
+
+def test_visible_fraction_of_a_half_hidden_person():
+    # person 2 at (8, 0.5) behind person 1 at (6, 0.9), level camera at 1 m: person 1 covers about half of 2
+    cam = dict(WALL_CAM, pitch=0.0, position=[0.0, 0.0, 1.0])
+    scene = Scene(np.array(WALL_X) * 3, 0.425, 2, wall_cameras=[cam])
+    scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1, 2]), np.array([[6.0, 0.78], [8.0, 0.85]]))
+    frame = WallCamera(cam, scene).capture(0.0)
+    fraction = dict(zip(frame.ids.tolist(), frame.visible_fraction))
+    assert fraction[1] == pytest.approx(1.0, abs=0.03)
+    assert 0.2 < fraction[2] < 0.8
+    # hidden entirely: person 2 right behind person 1 on the camera's line of sight
+    scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1, 2]), np.array([[6.0, 0.0], [9.0, 0.0]]))
+    frame = WallCamera(cam, scene).capture(0.0)
+    assert 2 not in frame.ids or dict(zip(frame.ids.tolist(), frame.visible_fraction))[2] < 0.05
+
+
+def test_segmentation_agrees_with_laser_hits():
+    # a depth camera and a laser at the same height and place see the same people: 14 persons scattered ahead,
+    # some hiding others; everyone with 3 or more beams shows in the camera, and nobody the camera misses has a beam
+    rng = np.random.default_rng(7)
+    xy = np.stack([rng.uniform(1.5, 7.5, 14), rng.uniform(-2.5, 2.5, 14)], 1)
+    scene, cam = depth_scene(capacity=14, position=[0.0, 0.0, 0.70], range_max=20.0)
+    scene.sync(np.zeros(3), np.arange(14), xy)
+    frame = DepthCamera(cam, scene, np.random.default_rng(0)).capture(0.0)
+    laser = Laser(validate({"name": "l", "mount": [0.0, 0.0, 0.0], "fov_deg": 56.0, "resolution_deg": 0.25,
+                            "noise": []}, LASER, "<test>"), scene, np.random.default_rng(0))
+    scan = laser.scan(0.0, np.zeros(3))
+    beams = np.bincount(scan.person_id[scan.person_id >= 0], minlength=14)
+    pixels = np.bincount(frame.person_id[frame.person_id >= 0], minlength=14)
+    in_view = np.abs(np.degrees(np.arctan2(xy[:, 1], xy[:, 0]))) < 25  # inside both fields of view
+    assert (pixels[in_view & (beams >= 3)] > 0).all()
+    assert (beams[in_view & (pixels == 0)] == 0).all()
+    assert (beams[in_view] == 0).any() and (beams[in_view] >= 3).any()  # some hidden, some seen
