@@ -17,9 +17,11 @@ from pipeline.fusion import fuse, to_frame
 from pipeline.frames import inverse, transform_points
 from pipeline.laser_detector import SegmentDetector
 from pipeline.tracker import NearestNeighbourTracker, TrackerParams
-from pipeline.types import DetectedPersons, LaserScan, TrackedPersons
+from pipeline.types import CameraFrame, DepthFrame, DetectedPersons, LaserScan, TrackedPersons, Visibility
 from scenarios.geometry import line_of_sight, wall_segments
 from sensors import Laser, Scene, parts_at
+from sensors.camera import DepthCamera, WallCamera, camera_pose
+from sensors.scene import PARTS
 
 from .crowd import AgentStates, Crowd
 from .robot import Robot
@@ -41,6 +43,9 @@ class Frame:
     tracks: TrackedPersons  # odom
     groundtruth: TrackedPersons  # persons within range, odom
     score: FrameResult
+    visibility: Visibility  # who each sensor saw, every person alive
+    depth_frames: list[DepthFrame]  # images taken since the previous Frame
+    camera_frames: list[CameraFrame]
 
 
 @dataclass
@@ -56,8 +61,14 @@ class Simulation:
     def __init__(self, scenario: dict):
         self.scenario = scenario
         self.walls = wall_segments(scenario)
-        seen = set().union(*(parts_at(laser["height"]) for laser in scenario["sensors"]["lasers"]))
-        self.scene = Scene(self.walls, scenario["robot"]["radius"], scenario["crowd"]["max_agents"], seen)
+        sensors = scenario["sensors"]
+        cameras = sensors["depth_cameras"] or sensors["wall_cameras"]
+        seen = set(PARTS) if cameras else set().union(*(parts_at(laser["height"]) for laser in sensors["lasers"]))
+        self.scene = Scene(self.walls, scenario["robot"]["radius"], scenario["crowd"]["max_agents"], seen,
+                           sensors["depth_cameras"], sensors["wall_cameras"])
+        # cameras hold GL contexts: made once, kept across resets (their noise streams are reset)
+        self.depth_cameras = [DepthCamera(p, self.scene, np.random.default_rng(0)) for p in sensors["depth_cameras"]]
+        self.wall_cameras = [WallCamera(p, self.scene) for p in sensors["wall_cameras"]]
         self.max_range = scenario["evaluation"]["max_range"]
         self.dt = scenario["dt"]
         self.reset()
@@ -67,8 +78,11 @@ class Simulation:
         start, fresh detectors, tracker and scores. The MuJoCo scene is kept; nothing else carries over."""
         scenario = self.scenario
         self.seed = scenario["seed"] if seed is None else int(seed)
-        streams = np.random.SeedSequence(self.seed).spawn(3 + len(scenario["sensors"]["lasers"]))
+        n_lasers = len(scenario["sensors"]["lasers"])
+        streams = np.random.SeedSequence(self.seed).spawn(3 + n_lasers + len(self.depth_cameras))
         rngs = [np.random.default_rng(s) for s in streams]
+        for k, camera in enumerate(self.depth_cameras):
+            camera.rng = rngs[3 + n_lasers + k]
         self.crowd = Crowd(scenario, rngs[0])
         self.robot = Robot(scenario["robot"], rngs[1])
         self.lasers = [Laser(p, self.scene, rngs[3 + k]) for k, p in enumerate(scenario["sensors"]["lasers"])]
@@ -78,6 +92,11 @@ class Simulation:
         self.clearmot = ClearMot(scenario["evaluation"]["threshold"])
         self.timing = Timing()
         self._next_scan = np.zeros(len(self.lasers))
+        self._next_depth = np.zeros(len(self.depth_cameras))
+        self._next_wall = np.zeros(len(self.wall_cameras))
+        self._pending_depth: list[DepthFrame] = []
+        self._pending_camera: list[CameraFrame] = []
+        self._latest_fraction: dict[str, tuple[np.ndarray, np.ndarray]] = {}  # camera -> (ids, visible fractions)
         self._fused_ids = 0
         self._frame = 0
         self._last_scans: list[LaserScan] = []
@@ -88,6 +107,8 @@ class Simulation:
         for _ in range(steps):
             self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p["radius"])
         self._next_scan[:] = self.crowd.t
+        self._next_depth[:] = self.crowd.t
+        self._next_wall[:] = self.crowd.t
 
     def _front_clearance(self) -> float:
         """Distance to the nearest laser return in the robot's path (a corridor as wide as the robot)."""
@@ -123,11 +144,18 @@ class Simulation:
         self.timing.crowd_s += t1 - t0
         stamp = self.crowd.t
         due = [k for k in range(len(self.lasers)) if self._next_scan[k] <= stamp + 1e-9]
-        if not due:
+        depth_due = [k for k in range(len(self.depth_cameras)) if self._next_depth[k] <= stamp + 1e-9]
+        wall_due = [k for k in range(len(self.wall_cameras)) if self._next_wall[k] <= stamp + 1e-9]
+        if not (due or depth_due or wall_due):
             self.timing.wall_s += t1 - t0
             return None
         agents = self.crowd.states()
         self.scene.sync(self.robot.pose, agents.id, agents.position, agents.velocity, agents.walked)
+        self._capture_images(stamp, depth_due, wall_due)
+        if not due:
+            self.timing.sensors_s += time.perf_counter() - t1
+            self.timing.wall_s += time.perf_counter() - t0
+            return None
         scans, batches = [], []
         for k in due:
             self._next_scan[k] += self.lasers[k].period
@@ -148,10 +176,62 @@ class Simulation:
         gt = self._groundtruth(agents)
         score = self.clearmot.update(gt.track_id, gt.position, tracks.track_id, tracks.position)
         frame = Frame(self._frame, stamp, self.robot.pose.copy(), self.robot.world_T_odom, agents, scans,
-                      detections, tracks, gt, score)
+                      detections, tracks, gt, score, self._visibility(agents, scans), self._pending_depth,
+                      self._pending_camera)
+        self._pending_depth, self._pending_camera = [], []
         self._frame += 1
         self.timing.wall_s += time.perf_counter() - t0
         return frame
+
+    def _capture_images(self, stamp: float, depth_due: list[int], wall_due: list[int]) -> None:
+        for k in depth_due:
+            self._next_depth[k] += self.depth_cameras[k].period
+            image = self.depth_cameras[k].capture(stamp)
+            self._pending_depth.append(image)
+            self._latest_fraction[image.frame] = self.depth_cameras[k].visibility(image)
+        for k in wall_due:
+            self._next_wall[k] += self.wall_cameras[k].period
+            image = self.wall_cameras[k].capture(stamp)
+            self._pending_camera.append(image)
+            self._latest_fraction[image.frame] = (image.ids, image.visible_fraction)
+
+    def _visibility(self, agents: AgentStates, scans: list[LaserScan]) -> Visibility:
+        """Per person and sensor: the laser beams that hit them, or the cameras' latest visible share, and whether
+        they were within the sensor's field of view."""
+        n = len(agents.id)
+        names = [laser.name for laser in self.lasers] + [c.name for c in self.depth_cameras + self.wall_cameras]
+        amount = np.zeros((n, len(names)))
+        in_view = np.zeros((n, len(names)), bool)
+        by_name = {scan.frame: scan for scan in scans}
+        for k, laser in enumerate(self.lasers):
+            scan = by_name.get(laser.name)
+            if scan is not None:
+                hit = scan.person_id[scan.person_id >= 0]
+                amount[:, k] = np.bincount(np.searchsorted(agents.id, hit), minlength=n)[:n]
+            pose = laser.pose_in(self.robot.pose)
+            rel = agents.position - pose[:2]
+            bearing = np.arctan2(rel[:, 1], rel[:, 0]) - pose[2]
+            half = np.radians(laser.p["fov_deg"]) / 2
+            in_view[:, k] = (np.linalg.norm(rel, axis=1) <= laser.p["range_max"]) & (
+                np.abs(np.arctan2(np.sin(bearing), np.cos(bearing))) <= half)
+        for j, camera in enumerate(self.depth_cameras + self.wall_cameras):
+            k = len(self.lasers) + j
+            ids, share = self._latest_fraction.get(camera.name, (None, None))
+            if ids is None:
+                amount[:, k] = np.nan
+            else:
+                rows = np.searchsorted(agents.id, ids)
+                keep = (rows < n) & (agents.id[np.minimum(rows, n - 1)] == ids)
+                amount[rows[keep], k] = share[keep]
+            origin, rot = camera_pose(self.scene, camera.name)
+            centre = np.column_stack([agents.position, np.full(n, 1.0)])  # the body's middle
+            cam = (centre - origin) @ rot
+            far = camera.p.get("range_max", np.inf)
+            ahead = (cam[:, 2] > 0.05) & (cam[:, 2] <= far)
+            size = camera.intrinsics
+            uv = size.project(np.where(ahead[:, None], cam, [0.0, 0.0, 1.0]))
+            in_view[:, k] = ahead & (uv[:, 0] >= 0) & (uv[:, 0] < size.width) & (uv[:, 1] >= 0) & (uv[:, 1] < size.height)
+        return Visibility(agents.id.copy(), names, amount, in_view)
 
     def frames(self, duration: float):
         """Yield the Frames of ``duration`` seconds of simulated time (after the warm-up)."""

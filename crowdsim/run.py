@@ -21,6 +21,9 @@ from scenarios.geometry import wall_segments
 from .loop import Simulation
 
 CSV_HEADER = "frame,t,id,x,y,vx,vy"
+# the ground truth adds, per person, the laser beams that hit them this cycle (all lasers) and whether any did:
+# seed 000 ignores correspondences to persons the lasers could not see
+GT_HEADER = CSV_HEADER + ",beams,visible"
 CROWD_EVERY = 5  # tracking cycles between the crowd snapshots drawn in the top-down picture
 
 
@@ -40,10 +43,20 @@ def _rows(frame_index: int, stamp: float, persons) -> np.ndarray:
                             persons.velocity])
 
 
-def write_csv(path: Path, rows: list[np.ndarray]) -> None:
-    data = np.concatenate(rows) if rows else np.zeros((0, 7))
-    np.savetxt(path, data, fmt=["%d", "%.2f", "%d", "%.4f", "%.4f", "%.4f", "%.4f"], delimiter=",",
-               header=CSV_HEADER, comments="")
+def _gt_rows(frame) -> np.ndarray:
+    """Ground-truth rows with their laser beam counts and visibility."""
+    vis = frame.visibility
+    lasers = [k for k, name in enumerate(vis.sensors) if name in {scan.frame for scan in frame.scans}]
+    beams = vis.amount[:, lasers].sum(axis=1) if lasers else np.zeros(len(vis.ids))
+    of_gt = beams[np.searchsorted(vis.ids, frame.groundtruth.track_id)] if len(vis.ids) else np.zeros(0)
+    return np.column_stack([_rows(frame.index, frame.stamp, frame.groundtruth), of_gt, of_gt > 0])
+
+
+def write_csv(path: Path, rows: list[np.ndarray], header: str = CSV_HEADER) -> None:
+    columns = header.count(",") + 1
+    data = np.concatenate(rows) if rows else np.zeros((0, columns))
+    fmt = ["%d", "%.2f", "%d", "%.4f", "%.4f", "%.4f", "%.4f", "%d", "%d"][:columns]
+    np.savetxt(path, data, fmt=fmt, delimiter=",", header=header, comments="")
 
 
 def summary_table(metrics: dict) -> str:
@@ -103,7 +116,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
                bar_format="{l_bar}{bar}| {n:.1f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
     t0 = sim.crowd.t
     for frame in sim.frames(duration):
-        gt_rows.append(_rows(frame.index, frame.stamp, frame.groundtruth))
+        gt_rows.append(_gt_rows(frame))
         track_rows.append(_rows(frame.index, frame.stamp, frame.tracks))
         counts.append(len(frame.groundtruth))
         robot_path.append(frame.robot_pose)
@@ -135,7 +148,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
             "warmup_wall_s": warmup_s,
         },
     }
-    write_csv(tmp / "groundtruth.csv", gt_rows)
+    write_csv(tmp / "groundtruth.csv", gt_rows, GT_HEADER)
     write_csv(tmp / "tracks.csv", track_rows)
     (tmp / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
     table = summary_table(metrics)

@@ -77,6 +77,28 @@ class CameraFrame:
 
 
 @dataclass
+class Visibility:
+    """Who each sensor could see at one tracking cycle (simulation-only ground truth, one row per person alive).
+
+    ``amount`` [n, k]: for a laser the number of its beams that hit the person, for a camera the visible fraction
+    of the person in its latest image (NaN before its first). ``in_view`` [n, k]: within the sensor's field of view
+    and range, so a person in view whom the sensor does not see is ``occluded``.
+    """
+
+    ids: np.ndarray
+    sensors: list[str]
+    amount: np.ndarray
+    in_view: np.ndarray
+
+    @property
+    def occluded(self) -> np.ndarray:
+        return self.in_view & ~(self.amount > 0)
+
+    def of(self, sensor: str) -> np.ndarray:
+        return self.amount[:, self.sensors.index(sensor)]
+
+
+@dataclass
 class DetectedPersons:
     """Detections of one detector (or one fusion stage) at one instant, in ``frame``."""
 

@@ -167,6 +167,45 @@ LASER = Schema({
                    doc="what a beam without a return reads: NaN, or range_max as many drivers report"),
 }, presets=LASER_PRESETS)
 
+# Kinect-like RGB-D cameras (Microsoft Kinect / Asus Xtion: 640 x 480 at 30 Hz, 43 degrees vertical field of view,
+# about 0.5-8 m; Khoshelham & Elberink 2012); the 160 x 120 variant is the same camera at a quarter resolution
+DEPTH_CAMERA_PRESETS = {
+    "kinect_640": {"width": 640, "height": 480, "fovy_deg": 43.0, "range_min": 0.5, "range_max": 8.0, "rate": 30.0,
+                   "noise": "kinect"},
+    "kinect_160": {"width": 160, "height": 120, "fovy_deg": 43.0, "range_min": 0.5, "range_max": 8.0, "rate": 30.0,
+                   "noise": "kinect"},
+}
+
+DEPTH_CAMERA = Schema({
+    "name": F("str", required=True, doc="the camera's optical frame name"),
+    "preset": F("str", None, choices=tuple(DEPTH_CAMERA_PRESETS), doc="a camera model whose values fill the keys not given"),
+    "position": F("point3", [0.45, 0.0, 1.45],
+                  doc="m, in base_link (SPENCER: RGB-D cameras at head height, front and rear)"),
+    "yaw": F("float", 0.0, doc="rad, viewing direction in base_link (pi: looking backwards)"),
+    "pitch": F("float", 0.0, min=-1.57, max=1.57, doc="rad, tilt down (positive) or up"),
+    "width": F("int", 160, min=8, max=4096, doc="pixels"),
+    "height": F("int", 120, min=8, max=4096, doc="pixels"),
+    "fovy_deg": F("float", 43.0, min=1.0, max=170.0, doc="deg, vertical field of view (Kinect: 43)"),
+    "range_min": F("float", 0.5, min=0.0, doc="m, nearer depths read NaN (Kinect: 0.5)"),
+    "range_max": F("float", 8.0, min=0.0, exclusive_min=True, doc="m, farther depths read NaN (Kinect: ~8)"),
+    "rate": F("float", 15.0, min=0.0, exclusive_min=True, doc="Hz"),
+    "noise": F("str", "kinect", choices=("kinect", "none"),
+               doc="kinect: sigma 1.425e-3 z^2 and 1/8-pixel disparity steps (Khoshelham & Elberink 2012)"),
+    "rgb": F("bool", False, doc="render a colour image too (a second pass)"),
+}, presets=DEPTH_CAMERA_PRESETS)
+
+WALL_CAMERA = Schema({
+    "name": F("str", required=True, doc="the camera's frame name"),
+    "position": F("point3", required=True, doc="m, in the world"),
+    "yaw": F("float", 0.0, doc="rad, viewing direction in the world"),
+    "pitch": F("float", 0.5, min=-1.57, max=1.57, doc="rad, tilt down (positive)"),
+    "width": F("int", 320, min=8, max=4096, doc="pixels (seed 001: flea2 cameras, up to 640 x 480)"),
+    "height": F("int", 240, min=8, max=4096, doc="pixels"),
+    "fovy_deg": F("float", 45.0, min=1.0, max=170.0, doc="deg, vertical field of view"),
+    "rate": F("float", 10.0, min=0.0, exclusive_min=True, doc="Hz"),
+    "rgb": F("bool", True, doc="render a colour image (the segmentation and boxes come without it)"),
+})
+
 DETECTOR = Schema({
     "jump_distance": F("float", 0.4, min=0.0, exclusive_min=True, doc="m, seed 000 Sec. 4.2: 0.4 m"),
     "min_points": F("int", 3, min=1, doc="seed 000 Sec. IV-C: far echoes of fewer than 3 points are unreliable"),
@@ -224,7 +263,9 @@ SCENARIO = Schema({
     "standing": F(ListOf(F(STANDING)), [], doc="single standing persons and static conversation groups"),
     "clusters": F(ListOf(F(CLUSTER)), [], doc="persons present from the start, on a route"),
     "robot": F(ROBOT, required=True, doc="the robot's start, route and limits"),
-    "sensors": F(Schema({"lasers": F(ListOf(F(LASER), min_items=1), required=True, doc="2D lasers on the robot")}),
+    "sensors": F(Schema({"lasers": F(ListOf(F(LASER), min_items=1), required=True, doc="2D lasers on the robot"),
+                         "depth_cameras": F(ListOf(F(DEPTH_CAMERA)), [], doc="RGB-D cameras on the robot"),
+                         "wall_cameras": F(ListOf(F(WALL_CAMERA)), [], doc="fixed cameras in the world")}),
                  required=True, doc="the robot's sensors"),
     "pipeline": F(PIPELINE, doc="detector, fusion and tracker parameters"),
     "evaluation": F(EVALUATION, doc="how the tracks are scored"),

@@ -140,6 +140,14 @@ def check_geometry(scenario: dict, source: str) -> None:
             raise ScenarioError(source, f"sources[{i}].routes", "expected at least one route with a positive weight")
         if src["stop"] < src["start"]:
             raise ScenarioError(source, f"sources[{i}].stop", f"expected a time after sources[{i}].start")
+    seen: dict[str, str] = {}
+    for kind in ("lasers", "depth_cameras", "wall_cameras"):
+        for i, sensor in enumerate(scenario["sensors"][kind]):
+            key = f"sensors.{kind}[{i}].name"
+            if sensor["name"] in seen or sensor["name"] in ("robot", "floor"):
+                raise ScenarioError(source, key, f"{sensor['name']!r} is taken ({seen.get(sensor['name'], 'reserved')})"
+                                                 "; expected a name of its own for every sensor")
+            seen[sensor["name"]] = key
     segs = wall_segments(scenario)
     radius = max(t["radius"] for t in types.values()) if types else 0.25
     places = [(f"waypoints.{n}.position", w["position"], "goal") for n, w in scenario["waypoints"].items()]

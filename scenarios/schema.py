@@ -21,8 +21,8 @@ class ScenarioError(ValueError):
 
 @dataclass(frozen=True)
 class Field:
-    """One key: ``kind`` is 'float', 'int', 'str', 'bool', 'point' ([x, y]), 'pose' ([x, y, yaw]), 'points'
-    (a list of [x, y]), a nested ``Schema``, ``ListOf`` or ``MapOf``."""
+    """One key: ``kind`` is 'float', 'int', 'str', 'bool', 'point' ([x, y]), 'point3' ([x, y, z]), 'pose'
+    ([x, y, yaw]), 'points' (a list of [x, y]), a nested ``Schema``, ``ListOf`` or ``MapOf``."""
 
     kind: Any
     default: Any = None
@@ -102,6 +102,8 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
             out = value
         elif kind == "point":
             out = _check_point(value, 2, err, "a point [x, y] in metres")
+        elif kind == "point3":
+            out = _check_point(value, 3, err, "a point [x, y, z] in metres")
         elif kind == "pose":
             out = _check_point(value, 3, err, "a pose [x, y, yaw] in metres and radians")
         elif kind == "points":

@@ -224,6 +224,11 @@ class DepthCamera:
         points = self._rays[valid] * z[valid][:, None]
         return DepthFrame(stamp, self.name, z, points, self.scene.person_of_geom(out["geom"]), out.get("rgb"))
 
+    def visibility(self, frame: DepthFrame) -> tuple[np.ndarray, np.ndarray]:
+        """Ids of the persons the image shows and the share of each that shows (the scene as at the capture)."""
+        ids, _, _, fraction = person_boxes(self.scene, self.name, self.intrinsics, frame.person_id)
+        return ids, fraction
+
 
 class WallCamera:
     """A fixed camera: RGB and segmentation, and for every person in view the visible box and visible fraction."""
@@ -243,60 +248,72 @@ class WallCamera:
     def capture(self, stamp: float) -> CameraFrame:
         out = self.renderer.render(self.name, depth=False, segmentation=True, rgb=self.p["rgb"])
         seg = self.scene.person_of_geom(out["geom"])
-        ids, counts = np.unique(seg[seg >= 0], return_counts=True)
-        boxes = np.zeros((len(ids), 4))
-        for k, pid in enumerate(ids):  # one pass per visible person over its own pixels only
-            v, u = np.nonzero(seg == pid)
-            boxes[k] = u.min(), v.min(), u.max() + 1, v.max() + 1
-        full_boxes, full_counts = self.silhouettes(ids)
-        fraction = np.minimum(counts / np.maximum(full_counts, 1), 1.0)
+        ids, boxes, full_boxes, fraction = person_boxes(self.scene, self.name, self.intrinsics, seg)
         return CameraFrame(stamp, self.name, out.get("rgb"), seg, ids, boxes, full_boxes, fraction)
 
-    def silhouettes(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Box and pixel count of each person (by id) as it would show with nobody and nothing in front: every
-        pixel of the person's bounding box ray-cast against that person's own torso, head and legs."""
-        origin, rot = camera_pose(self.scene, self.name)
-        k = self.intrinsics
-        boxes, counts = np.zeros((len(ids), 4)), np.zeros(len(ids), np.int64)
-        for row, pid in enumerate(ids):
-            slot = int(np.flatnonzero(self.scene.slot_person_id == pid)[0])
-            pixels = self._box_pixels(slot, origin, rot)
-            if pixels is None:
-                continue
-            u, v = pixels
-            dirs = np.stack([(u + 0.5 - k.centre[0]) / k.f, (v + 0.5 - k.centre[1]) / k.f, np.ones(len(u))], 1) @ rot.T
-            hit = self._hits_person(slot, origin, dirs)
-            if hit.any():
-                boxes[row] = u[hit].min(), v[hit].min(), u[hit].max() + 1, v[hit].max() + 1
-                counts[row] = hit.sum()
-        return boxes, counts
 
-    def _box_pixels(self, slot: int, origin: np.ndarray, rot: np.ndarray):
-        """The pixels of the image box around the projection of the person's bounding box (None when behind)."""
-        x, y = self.scene.person_xy[slot]
-        reach = body.TORSO_RADIUS + body.LEG_LENGTH * np.sin(body.SWING_AMPLITUDE)
-        corners = np.array([[x + sx * reach, y + sy * reach, z] for sx in (-1, 1) for sy in (-1, 1)
-                            for z in (0.0, body.HEIGHT)])
-        cam = (corners - origin) @ rot
-        if (cam[:, 2] <= 1e-3).any():
-            return None
-        uv = self.intrinsics.project(cam)
-        u0, v0 = np.maximum(np.floor(uv.min(axis=0)).astype(int), 0)
-        u1 = min(int(np.ceil(uv[:, 0].max())), self.intrinsics.width)
-        v1 = min(int(np.ceil(uv[:, 1].max())), self.intrinsics.height)
-        if u1 <= u0 or v1 <= v0:
-            return None
-        vv, uu = np.mgrid[v0:v1, u0:u1]
-        return uu.ravel(), vv.ravel()
+def person_boxes(scene: Scene, camera: str, intrinsics: Intrinsics, seg: np.ndarray):
+    """For every person a segmentation image shows: id, box around the visible pixels, box around the person as it
+    would show with nobody and nothing in front and no image border (so it may reach outside the image), and the
+    share of those pixels that show."""
+    ids, counts = np.unique(seg[seg >= 0], return_counts=True)
+    boxes = np.zeros((len(ids), 4))
+    for k, pid in enumerate(ids):
+        v, u = np.nonzero(seg == pid)
+        boxes[k] = u.min(), v.min(), u.max() + 1, v.max() + 1
+    full_boxes, full_counts = silhouettes(scene, camera, intrinsics, ids)
+    return ids, boxes, full_boxes, np.minimum(counts / np.maximum(full_counts, 1), 1.0)
 
-    def _hits_person(self, slot: int, o: np.ndarray, d: np.ndarray) -> np.ndarray:
-        """Which rays from ``o`` along ``d`` [n, 3] meet the person's torso cylinder, head sphere or legs."""
-        x, y = self.scene.person_xy[slot]
-        hit = _ray_vertical_cylinder(o, d, np.array([x, y]), body.TORSO_RADIUS, body.TORSO_BOTTOM, body.TORSO_TOP)
-        hit |= _ray_sphere(o, d, np.array([x, y, body.HEAD_CENTRE]), body.HEAD_RADIUS)
-        for hip, foot in zip(self.scene.hips[slot], self.scene.feet[slot]):
-            hit |= _ray_capsule(o, d, hip, foot, body.LEG_RADIUS)
-        return hit
+
+def silhouettes(scene: Scene, camera: str, intrinsics: Intrinsics, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Box and pixel count of each person (by id) as it would show with nobody and nothing in front: every pixel
+    of the person's bounding box ray-cast against that person's own torso, head and legs."""
+    origin, rot = camera_pose(scene, camera)
+    k = intrinsics
+    boxes, counts = np.zeros((len(ids), 4)), np.zeros(len(ids), np.int64)
+    for row, pid in enumerate(ids):
+        slot = int(np.flatnonzero(scene.slot_person_id == pid)[0])
+        pixels = _box_pixels(scene, slot, origin, rot, k)
+        if pixels is None:
+            continue
+        u, v = pixels
+        dirs = np.stack([(u + 0.5 - k.centre[0]) / k.f, (v + 0.5 - k.centre[1]) / k.f, np.ones(len(u))], 1) @ rot.T
+        hit = _hits_person(scene, slot, origin, dirs)
+        if hit.any():
+            boxes[row] = u[hit].min(), v[hit].min(), u[hit].max() + 1, v[hit].max() + 1
+            counts[row] = hit.sum()
+    return boxes, counts
+
+
+def _box_pixels(scene: Scene, slot: int, origin: np.ndarray, rot: np.ndarray, k: Intrinsics):
+    """The pixels of the box around the projection of the person's bounding box (None when behind the camera or
+    out of the image)."""
+    x, y = scene.person_xy[slot]
+    reach = body.TORSO_RADIUS + body.LEG_LENGTH * np.sin(body.SWING_AMPLITUDE)
+    corners = np.array([[x + sx * reach, y + sy * reach, z] for sx in (-1, 1) for sy in (-1, 1)
+                        for z in (0.0, body.HEIGHT)])
+    cam = (corners - origin) @ rot
+    if (cam[:, 2] <= 1e-3).any():
+        return None
+    uv = k.project(cam)
+    # not clipped to the image: a person cut by its border shows only part of the silhouette (within a margin of
+    # one image size, which bounds the work for someone right in front of the lens)
+    u0, v0 = np.maximum(np.floor(uv.min(axis=0)).astype(int), [-k.width, -k.height])
+    u1, v1 = min(int(np.ceil(uv[:, 0].max())), 2 * k.width), min(int(np.ceil(uv[:, 1].max())), 2 * k.height)
+    if u1 <= max(u0, 0) or v1 <= max(v0, 0) or u0 >= k.width or v0 >= k.height:
+        return None
+    vv, uu = np.mgrid[v0:v1, u0:u1]
+    return uu.ravel(), vv.ravel()
+
+
+def _hits_person(scene: Scene, slot: int, o: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """Which rays from ``o`` along ``d`` [n, 3] meet the person's torso cylinder, head sphere or legs."""
+    x, y = scene.person_xy[slot]
+    hit = _ray_vertical_cylinder(o, d, np.array([x, y]), body.TORSO_RADIUS, body.TORSO_BOTTOM, body.TORSO_TOP)
+    hit |= _ray_sphere(o, d, np.array([x, y, body.HEAD_CENTRE]), body.HEAD_RADIUS)
+    for hip, foot in zip(scene.hips[slot], scene.feet[slot]):
+        hit |= _ray_capsule(o, d, hip, foot, body.LEG_RADIUS)
+    return hit
 
 
 def _ray_vertical_cylinder(o, d, centre, r, z0, z1) -> np.ndarray:

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from crowdsim.cli import main
-from crowdsim.run import CSV_HEADER, RunDirError, run
+from crowdsim.run import CSV_HEADER, GT_HEADER, RunDirError, run
 from scenarios import bundled_scenarios, load_scenario
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -174,11 +174,14 @@ def test_short_run_writes_a_complete_run_directory(tmp_path, capsys):
     assert metrics["frames"] == 50  # 2 s of two 25 Hz lasers scanning together
     assert metrics["tracking"]["gt"] > 0
 
-    for name in ("groundtruth.csv", "tracks.csv"):
+    for name, header in (("groundtruth.csv", GT_HEADER), ("tracks.csv", CSV_HEADER)):
         lines = (out / name).read_text().splitlines()
-        assert lines[0] == CSV_HEADER == "frame,t,id,x,y,vx,vy"
-        assert all(len(row.split(",")) == 7 for row in lines[1:])
+        assert lines[0] == header
+        assert all(len(row.split(",")) == header.count(",") + 1 for row in lines[1:])
+    assert GT_HEADER == "frame,t,id,x,y,vx,vy,beams,visible" and CSV_HEADER == "frame,t,id,x,y,vx,vy"
     gt_rows = (out / "groundtruth.csv").read_text().splitlines()[1:]
+    # visible is 1 exactly where at least one beam hit the person
+    assert all((int(r.split(",")[7]) > 0) == (r.split(",")[8] == "1") for r in gt_rows)
     assert len({row.split(",")[0] for row in gt_rows}) == metrics["frames"]
     assert len(gt_rows) == metrics["tracking"]["gt"]
     stamps = [float(row.split(",")[1]) for row in gt_rows]

@@ -91,3 +91,55 @@ def test_reset_reruns_bit_for_bit_with_ids_from_one():
         assert np.array_equal(a[0], c[0]) and np.array_equal(a[1], c[1])
     assert any(len(a[0]) != len(o[0]) or not np.array_equal(a[1], o[1]) for a, o in zip(first, other))
     assert min(first[0][0]) == 1  # ids restart at 1 after a reset
+
+
+def camera_room(seed=4):
+    """A 14 m x 10 m room with a source, two lasers, a front Kinect-like camera at 15 Hz and a wall camera at 10 Hz."""
+    from scenarios import scenario_from_dict
+
+    return scenario_from_dict({
+        "name": "camera_room", "seed": seed, "warmup": 3.0, "duration": 2.0,
+        "map": {"walls": [[[0, 0], [14, 0], [14, 10], [0, 10], [0, 0]]]},
+        "waypoints": {"east": {"position": [12, 5], "radius": 1.0}},
+        "routes": {"across": {"waypoints": ["east"]}},
+        "sources": [{"position": [2, 5], "size": [1, 4], "rate": 2.0, "routes": {"across": 1.0}}],
+        "standing": [{"position": [7, 8], "count": 3}],
+        "robot": {"start": [6, 2, 1.5708]},
+        "sensors": {"lasers": [{"name": "front_laser", "mount": [0.25, 0, 0]},
+                               {"name": "rear_laser", "mount": [-0.25, 0, 3.14159]}],
+                    "depth_cameras": [{"name": "front_depth", "preset": "kinect_160", "rate": 15.0}],
+                    "wall_cameras": [{"name": "corner_cam", "position": [0.3, 0.3, 2.8], "yaw": 0.6, "pitch": 0.45}]},
+    }, source="<test>")
+
+
+def test_cameras_run_at_their_rates_and_report_who_they_saw():
+    sim = Simulation(camera_room())
+    sim.warm_up()
+    frames = list(sim.frames(2.0))
+    assert len(frames) == 50  # the lasers' 25 Hz sets the tracking cycles
+    depth = [d for f in frames for d in f.depth_frames]
+    wall = [c for f in frames for c in f.camera_frames]
+    # due at 3.0 + k / 15 and 3.0 + k / 10 s (the warm-up ends at 3 s), taken at the first 0.04 s tick at or after:
+    # k = 0 .. 30 and 0 .. 20 up to 5 s
+    assert len(depth) == 31 and len(wall) == 21
+    assert all(0 <= d.stamp - (3.0 + k / 15) < 0.04 + 1e-9 for k, d in enumerate(depth))
+    assert depth[0].depth.shape == (120, 160) and wall[0].rgb.shape == (240, 320, 3)
+    last = frames[-1].visibility
+    assert last.sensors == ["front_laser", "rear_laser", "front_depth", "corner_cam"]
+    assert np.array_equal(last.ids, frames[-1].agents.id)
+    beams = last.amount[:, :2]
+    assert (beams[~last.in_view[:, :2]] == 0).all()  # no beam hits a person outside the laser's field of view
+    # a person whose middle is out of the image shows at most the part inside it
+    assert (last.amount[~last.in_view[:, 3], 3] < 0.6).all()
+    assert last.occluded.shape == last.amount.shape
+    assert (last.amount[:, 3] > 0).sum() >= 3  # the corner camera sees people
+
+
+def test_camera_runs_are_bit_for_bit_repeatable():
+    images = []
+    for _ in range(2):
+        sim = Simulation(camera_room())
+        sim.warm_up()
+        images.append([d.depth.tobytes() for f in sim.frames(0.6) for d in f.depth_frames])
+    assert len(images[0]) == 10  # k / 15 <= 0.6 s for k = 0 .. 9
+    assert images[0] == images[1]
