@@ -63,5 +63,22 @@ class Recording:
                                                                        compose(w, [0, 1, 0])[:2] - w[:2]],
                                           colors=[[255, 0, 0], [0, 255, 0]]))
 
+    def log_images(self, frame: Frame) -> None:
+        """The robot's depth images (and colour) and the wall cameras' images with each person's visible box."""
+        rec = self.rec
+        for image in frame.depth_frames:
+            rec.set_time("sim_time", duration=image.stamp)
+            rec.log(f"cameras/{image.frame}/depth", rr.DepthImage(np.nan_to_num(image.depth, nan=0.0), meter=1.0))
+            rec.log(f"cameras/{image.frame}/people", rr.SegmentationImage(np.maximum(image.person_id + 1, 0) % 256))
+            if image.rgb is not None:
+                rec.log(f"cameras/{image.frame}/rgb", rr.Image(image.rgb))
+        for image in frame.camera_frames:
+            rec.set_time("sim_time", duration=image.stamp)
+            if image.rgb is not None:
+                rec.log(f"cameras/{image.frame}/rgb", rr.Image(image.rgb))
+            rec.log(f"cameras/{image.frame}/rgb/people", rr.Boxes2D(
+                array=image.boxes, array_format=rr.Box2DFormat.XYXY, class_ids=image.ids % 256,
+                labels=[f"{i} ({100 * f:.0f}% visible)" for i, f in zip(image.ids, image.visible_fraction)]))
+
     def close(self) -> None:
         self.rec.flush()

@@ -125,6 +125,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
             crowd.append(np.column_stack([frame.agents.id, frame.agents.position]))
         if recording:
             recording.log(frame)
+            recording.log_images(frame)
         bar.update(round(frame.stamp - t0, 2) - bar.n)
     bar.close()
     if recording:

@@ -143,3 +143,19 @@ def test_camera_runs_are_bit_for_bit_repeatable():
         images.append([d.depth.tobytes() for f in sim.frames(0.6) for d in f.depth_frames])
     assert len(images[0]) == 10  # k / 15 <= 0.6 s for k = 0 .. 9
     assert images[0] == images[1]
+
+
+def test_the_recording_holds_the_camera_images_and_boxes(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    sc = camera_room()
+    sc["duration"] = 0.4
+    run(sc, tmp_path / "out", rrd=True, progress=False)
+    rerun_cli = Path(sys.executable).parent / "rerun"  # the viewer's command line, installed with rerun-sdk
+    listing = subprocess.run([str(rerun_cli), "rrd", "print", str(tmp_path / "out" / "recording.rrd")],
+                             capture_output=True, text=True, check=True).stdout
+    for entity in ("/cameras/front_depth/depth", "/cameras/front_depth/people", "/cameras/corner_cam/rgb",
+                   "/cameras/corner_cam/rgb/people", "/world/laser_points", "/world/tracks"):
+        assert entity in listing, entity
