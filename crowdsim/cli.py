@@ -76,6 +76,10 @@ def _cmd_bench(args) -> int:
         from .bench_sim import run_sim_benchmark
 
         run_sim_benchmark(quick=args.quick, json_path=args.json)
+    elif args.what == "sensors":
+        from .bench_sensors import run_sensor_benchmarks
+
+        run_sensor_benchmarks(json_path=args.json, quick=args.quick)
     else:
         from .bench import run_benchmarks
 
@@ -106,10 +110,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("scenario-keys", help="every key of the scenario format: kind, default, range, meaning")
     p.set_defaults(func=_cmd_scenario_keys)
     p = sub.add_parser("bench", help="measure the crowd, the lasers, the tracker and the whole loop; "
-                                     "`bench sim`: the crowd against JuPedSim")
-    p.add_argument("what", nargs="?", choices=("loop", "sim"), default="loop",
+                                     "`bench sim`: the crowd against JuPedSim; `bench sensors`: every sensor")
+    p.add_argument("what", nargs="?", choices=("loop", "sim", "sensors"), default="loop",
                    help="loop (default): every part and the airport loop; sim: the crowd simulator at 100, 1000 "
-                        "and 5000 agents side by side with JuPedSim's social force model")
+                        "and 5000 agents side by side with JuPedSim's social force model; sensors: each sensor's "
+                        "cost with 100 and 500 people, batched rays, and the robot's sensor mix against real time")
     p.add_argument("--json", help="also write the figures to this JSON file")
     p.add_argument("--quick", action="store_true", help="shorter measurements (for a smoke test)")
     p.set_defaults(func=_cmd_bench)

@@ -77,6 +77,7 @@ class GLRenderer:
     def __init__(self, scene: Scene, intrinsics: Intrinsics, rgb: bool = False):
         self.backend = os.environ.get("MUJOCO_GL", "glfw")
         self.scene = scene
+        self.intrinsics = intrinsics
         m = scene.model
         self.shape = (intrinsics.height, intrinsics.width)
         self.context = mujoco.GLContext(intrinsics.width, intrinsics.height)
@@ -109,8 +110,31 @@ class GLRenderer:
                                mujoco.mjtCatBit.mjCAT_ALL, scene)
         mujoco.mjr_render(self.rect, scene, self.mjr)
 
+    def _out_of_view(self, camera: str) -> np.ndarray:
+        """Geoms of the persons whose bounding sphere lies wholly outside the camera's view: drawing costs per geom
+        under Mesa, wherever the geom lands, so these are hidden while the camera draws."""
+        s = self.scene
+        centre = np.column_stack([s.person_xy[:s.alive], np.full(s.alive, body.HEIGHT / 2)])
+        origin, rot = camera_pose(s, camera)
+        c = (centre - origin) @ rot
+        k = self.intrinsics
+        tan_x, tan_y = k.width / 2 / k.f, k.height / 2 / k.f
+        r = body.HEIGHT / 2 + body.LEG_LENGTH * np.sin(body.SWING_AMPLITUDE)  # the sphere round a whole person
+        outside = ((c[:, 2] < -r) | (np.abs(c[:, 0]) - r * np.hypot(1, tan_x) > c[:, 2] * tan_x)
+                   | (np.abs(c[:, 1]) - r * np.hypot(1, tan_y) > c[:, 2] * tan_y))
+        return s.person_geoms(np.flatnonzero(outside))
+
     def render(self, camera: str, depth: bool = True, segmentation: bool = True, rgb: bool = False) -> dict:
         self.context.make_current()
+        hidden = self._out_of_view(camera)
+        alpha = self.scene.model.geom_rgba[hidden, 3].copy()
+        self.scene.model.geom_rgba[hidden, 3] = 0.0
+        try:
+            return self._render(camera, depth, segmentation, rgb)
+        finally:
+            self.scene.model.geom_rgba[hidden, 3] = alpha
+
+    def _render(self, camera: str, depth: bool, segmentation: bool, rgb: bool) -> dict:
         out = {}
         if depth or segmentation:
             self._draw(self.ids, camera)
@@ -256,106 +280,125 @@ def person_boxes(scene: Scene, camera: str, intrinsics: Intrinsics, seg: np.ndar
     """For every person a segmentation image shows: id, box around the visible pixels, box around the person as it
     would show with nobody and nothing in front and no image border (so it may reach outside the image), and the
     share of those pixels that show."""
-    ids, counts = np.unique(seg[seg >= 0], return_counts=True)
-    boxes = np.zeros((len(ids), 4))
-    for k, pid in enumerate(ids):
-        v, u = np.nonzero(seg == pid)
-        boxes[k] = u.min(), v.min(), u.max() + 1, v.max() + 1
-    full_boxes, full_counts = silhouettes(scene, camera, intrinsics, ids)
+    v, u = np.nonzero(seg >= 0)
+    ids, owner, counts = np.unique(seg[v, u], return_inverse=True, return_counts=True)
+    boxes = _boxes_of(owner, u, v, len(ids))
+    full_boxes, full_counts = silhouettes(scene, camera, intrinsics, ids, seg)
     return ids, boxes, full_boxes, np.minimum(counts / np.maximum(full_counts, 1), 1.0)
 
 
-def silhouettes(scene: Scene, camera: str, intrinsics: Intrinsics, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _boxes_of(owner: np.ndarray, u: np.ndarray, v: np.ndarray, n: int) -> np.ndarray:
+    """(u0, v0, u1, v1) around each owner's pixels (zeros for an owner without any)."""
+    boxes = np.zeros((n, 4))
+    if len(owner):
+        lo = np.full((n, 2), np.iinfo(np.int64).max)
+        hi = np.full((n, 2), np.iinfo(np.int64).min)
+        np.minimum.at(lo, owner, np.stack([u, v], 1))
+        np.maximum.at(hi, owner, np.stack([u, v], 1))
+        seen = lo[:, 0] <= hi[:, 0]
+        boxes[seen] = np.concatenate([lo[seen], hi[seen] + 1], 1)
+    return boxes
+
+
+def silhouettes(scene: Scene, camera: str, intrinsics: Intrinsics, ids: np.ndarray,
+                seg: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Box and pixel count of each person (by id) as it would show with nobody and nothing in front: every pixel
-    of the person's bounding box ray-cast against that person's own torso, head and legs."""
-    origin, rot = camera_pose(scene, camera)
+    of the person's bounding box ray-cast against that person's own torso, head and legs, all persons at once.
+    With the segmentation ``seg``, the pixels where the person shows are taken as hits without a cast."""
     k = intrinsics
-    boxes, counts = np.zeros((len(ids), 4)), np.zeros(len(ids), np.int64)
-    for row, pid in enumerate(ids):
-        slot = int(np.flatnonzero(scene.slot_person_id == pid)[0])
-        pixels = _box_pixels(scene, slot, origin, rot, k)
-        if pixels is None:
-            continue
-        u, v = pixels
-        dirs = np.stack([(u + 0.5 - k.centre[0]) / k.f, (v + 0.5 - k.centre[1]) / k.f, np.ones(len(u))], 1) @ rot.T
-        hit = _hits_person(scene, slot, origin, dirs)
-        if hit.any():
-            boxes[row] = u[hit].min(), v[hit].min(), u[hit].max() + 1, v[hit].max() + 1
-            counts[row] = hit.sum()
-    return boxes, counts
-
-
-def _box_pixels(scene: Scene, slot: int, origin: np.ndarray, rot: np.ndarray, k: Intrinsics):
-    """The pixels of the box around the projection of the person's bounding box (None when behind the camera or
-    out of the image)."""
-    x, y = scene.person_xy[slot]
+    origin, rot = camera_pose(scene, camera)
+    slot_of = {pid: slot for slot, pid in enumerate(scene.slot_person_id[:scene.alive])}
+    slots = np.array([slot_of[pid] for pid in ids], np.int64)
+    # each person's bounding box (legs may swing out of the torso) projected: the pixels to cast
     reach = body.TORSO_RADIUS + body.LEG_LENGTH * np.sin(body.SWING_AMPLITUDE)
-    corners = np.array([[x + sx * reach, y + sy * reach, z] for sx in (-1, 1) for sy in (-1, 1)
-                        for z in (0.0, body.HEIGHT)])
+    offsets = np.array([[sx * reach, sy * reach, z] for sx in (-1, 1) for sy in (-1, 1) for z in (0.0, body.HEIGHT)])
+    corners = np.concatenate([scene.person_xy[slots], np.zeros((len(slots), 1))], 1)[:, None, :] + offsets
     cam = (corners - origin) @ rot
-    if (cam[:, 2] <= 1e-3).any():
-        return None
-    uv = k.project(cam)
+    in_front = (cam[..., 2] > 1e-3).all(axis=1)
+    uv = k.project(np.where(in_front[:, None, None], cam, 1.0).reshape(-1, 3)).reshape(len(slots), 8, 2)
     # not clipped to the image: a person cut by its border shows only part of the silhouette (within a margin of
     # one image size, which bounds the work for someone right in front of the lens)
-    u0, v0 = np.maximum(np.floor(uv.min(axis=0)).astype(int), [-k.width, -k.height])
-    u1, v1 = min(int(np.ceil(uv[:, 0].max())), 2 * k.width), min(int(np.ceil(uv[:, 1].max())), 2 * k.height)
-    if u1 <= max(u0, 0) or v1 <= max(v0, 0) or u0 >= k.width or v0 >= k.height:
-        return None
-    vv, uu = np.mgrid[v0:v1, u0:u1]
-    return uu.ravel(), vv.ravel()
+    lo = np.maximum(np.floor(uv.min(axis=1)).astype(np.int64), [-k.width, -k.height])
+    hi = np.minimum(np.ceil(uv.max(axis=1)).astype(np.int64), [2 * k.width, 2 * k.height])
+    size = np.where(in_front[:, None], np.maximum(hi - lo, 0), 0)
+    count = size[:, 0] * size[:, 1]
+    owner = np.repeat(np.arange(len(slots)), count)
+    local = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+    u = lo[owner, 0] + local % np.maximum(size[owner, 0], 1)
+    v = lo[owner, 1] + local // np.maximum(size[owner, 0], 1)
+    hit = np.zeros(len(u), bool)
+    if seg is not None:
+        inside = np.flatnonzero((u >= 0) & (u < k.width) & (v >= 0) & (v < k.height))
+        hit[inside] = seg[v[inside], u[inside]] == ids[owner[inside]]
+    cast = np.flatnonzero(~hit)
+    d = np.stack([(u[cast] + 0.5 - k.centre[0]) / k.f, (v[cast] + 0.5 - k.centre[1]) / k.f,
+                  np.ones(len(cast))], 1) @ rot.T
+    hit[cast] = _hits_persons(scene, slots[owner[cast]], origin, d)
+    counts = np.bincount(owner[hit], minlength=len(slots))
+    return _boxes_of(owner[hit], u[hit], v[hit], len(slots)), counts
 
 
-def _hits_person(scene: Scene, slot: int, o: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """Which rays from ``o`` along ``d`` [n, 3] meet the person's torso cylinder, head sphere or legs."""
-    x, y = scene.person_xy[slot]
-    hit = _ray_vertical_cylinder(o, d, np.array([x, y]), body.TORSO_RADIUS, body.TORSO_BOTTOM, body.TORSO_TOP)
-    hit |= _ray_sphere(o, d, np.array([x, y, body.HEAD_CENTRE]), body.HEAD_RADIUS)
-    for hip, foot in zip(scene.hips[slot], scene.feet[slot]):
-        hit |= _ray_capsule(o, d, hip, foot, body.LEG_RADIUS)
+def _hits_persons(scene: Scene, slot: np.ndarray, o: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """Which rays from ``o`` along ``d`` [n, 3] meet the torso cylinder, head sphere or legs of person ``slot[i]``.
+
+    Component-wise in single precision relative to each person (a millimetre is far below a pixel here), as this
+    runs on every pixel of every person's box."""
+    f = np.float32
+    x, y = scene.person_xy[slot].T.astype(f)
+    ox, oy, oz = (f(c) for c in o)
+    dx, dy, dz = d.T.astype(f)
+    hit = _ray_vertical_cylinder(ox - x, oy - y, oz, dx, dy, dz, f(body.TORSO_RADIUS), f(body.TORSO_BOTTOM),
+                                 f(body.TORSO_TOP))
+    hit |= _ray_sphere(ox - x, oy - y, oz - f(body.HEAD_CENTRE), dx, dy, dz, f(body.HEAD_RADIUS))
+    for leg in (0, 1):
+        a, b = scene.hips[slot, leg].astype(f), scene.feet[slot, leg].astype(f)
+        hit |= _ray_capsule(ox - a[:, 0], oy - a[:, 1], oz - a[:, 2], dx, dy, dz, b - a, f(body.LEG_RADIUS))
     return hit
 
 
-def _ray_vertical_cylinder(o, d, centre, r, z0, z1) -> np.ndarray:
-    p = o[:2] - centre
-    a = d[:, 0] ** 2 + d[:, 1] ** 2
-    b = 2 * (d[:, :2] @ p)
-    c = p @ p - r * r
+def _ray_vertical_cylinder(px, py, oz, dx, dy, dz, r, z0, z1) -> np.ndarray:
+    """Rays from (px, py, oz), the origin relative to the axis, along (dx, dy, dz), t >= 0, that meet a vertical
+    cylinder of radius r about the axis between heights z0 and z1."""
+    a = dx * dx + dy * dy
+    b = 2 * (dx * px + dy * py)
+    c = px * px + py * py - r * r
     disc = b * b - 4 * a * c
     with np.errstate(divide="ignore", invalid="ignore"):
-        sq = np.sqrt(np.maximum(disc, 0.0))
+        sq = np.sqrt(np.maximum(disc, 0))
         t0, t1 = (-b - sq) / (2 * a), (-b + sq) / (2 * a)
         flat = a < 1e-12  # a vertical ray: inside the circle or not at all
         t0 = np.where(flat, np.where(c <= 0, -np.inf, np.inf), t0)
         t1 = np.where(flat, np.where(c <= 0, np.inf, -np.inf), t1)
-        za, zb = (z0 - o[2]) / d[:, 2], (z1 - o[2]) / d[:, 2]
-        level = np.abs(d[:, 2]) < 1e-12
-        tz0 = np.where(level, np.where((z0 <= o[2]) & (o[2] <= z1), -np.inf, np.inf), np.minimum(za, zb))
-        tz1 = np.where(level, np.where((z0 <= o[2]) & (o[2] <= z1), np.inf, -np.inf), np.maximum(za, zb))
-    enter = np.maximum(np.maximum(t0, tz0), 0.0)
+        za, zb = (z0 - oz) / dz, (z1 - oz) / dz
+        level = np.abs(dz) < 1e-12
+        inside = (z0 <= oz) & (oz <= z1)
+        tz0 = np.where(level, -np.inf if inside else np.inf, np.minimum(za, zb))
+        tz1 = np.where(level, np.inf if inside else -np.inf, np.maximum(za, zb))
+    enter = np.maximum(np.maximum(t0, tz0), 0)
     return (disc >= 0) & (enter <= np.minimum(t1, tz1))
 
 
-def _ray_sphere(o, d, centre, r) -> np.ndarray:
-    w = o - centre
-    a = np.einsum("ij,ij->i", d, d)
-    b = 2 * (d @ w)
-    disc = b * b - 4 * a * (w @ w - r * r)
-    return (disc >= 0) & (-b + np.sqrt(np.maximum(disc, 0.0)) >= 0)
+def _ray_sphere(wx, wy, wz, dx, dy, dz, r) -> np.ndarray:
+    """Rays from w (the origin relative to the centre) along d that meet a sphere of radius r."""
+    a = dx * dx + dy * dy + dz * dz
+    b = 2 * (dx * wx + dy * wy + dz * wz)
+    disc = b * b - 4 * a * (wx * wx + wy * wy + wz * wz - r * r)
+    return (disc >= 0) & (-b + np.sqrt(np.maximum(disc, 0)) >= 0)
 
 
-def _ray_capsule(o, d, a, b, r) -> np.ndarray:
-    """Rays within r of the segment a-b: the closest points of ray and segment, the ray's parameter kept >= 0."""
-    e = b - a
-    w0 = o - a
-    A = np.einsum("ij,ij->i", d, d)
-    B = d @ e
-    C = e @ e
-    D = d @ w0
-    E = e @ w0
+def _ray_capsule(wx, wy, wz, dx, dy, dz, e, r) -> np.ndarray:
+    """Rays from w (the origin relative to the segment's start) along d that pass within r of the segment e [n, 3]:
+    the closest points of ray and segment, the ray's parameter kept >= 0."""
+    ex, ey, ez = e[:, 0], e[:, 1], e[:, 2]
+    A = dx * dx + dy * dy + dz * dz
+    B = dx * ex + dy * ey + dz * ez
+    C = ex * ex + ey * ey + ez * ez
+    D = dx * wx + dy * wy + dz * wz
+    E = ex * wx + ey * wy + ez * wz
+    den = A * C - B * B
     with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.clip(np.where(A * C - B * B > 1e-12, (A * E - B * D) / (A * C - B * B), 0.0), 0.0, 1.0)
-    t = np.maximum((B * s - D) / A, 0.0)
-    s = np.clip((E + t * B) / C, 0.0, 1.0)
-    gap = w0[None, :] + t[:, None] * d - s[:, None] * e[None, :]
-    return np.einsum("ij,ij->i", gap, gap) <= r * r
+        s = np.clip(np.where(den > 1e-12, (A * E - B * D) / den, 0), 0, 1)
+    t = np.maximum((B * s - D) / A, 0)
+    s = np.clip((E + t * B) / C, 0, 1)
+    gx, gy, gz = wx + t * dx - s * ex, wy + t * dy - s * ey, wz + t * dz - s * ez
+    return gx * gx + gy * gy + gz * gz <= r * r

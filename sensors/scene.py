@@ -96,16 +96,20 @@ class Scene:
         self.parts = set(parts)
         persons = "\n".join(_person_xml(k, self.parts) for k in range(capacity))
         cameras = [*robot_cameras, *wall_cameras]
+        # a floor as big as the map plus a margin (an infinite plane costs a third of a camera image under Mesa)
+        corners = np.asarray(walls, float).reshape(-1, 2) if len(walls) else np.zeros((1, 2))
+        floor_centre = (corners.min(axis=0) + corners.max(axis=0)) / 2
+        floor_half = (corners.max(axis=0) - corners.min(axis=0)) / 2 + 20.0
         width = max([c["width"] for c in cameras] + [640])
         height = max([c["height"] for c in cameras] + [480])
         # the floor (for cameras; horizontal laser rays never meet it) and a light from above; offscreen buffers as
         # big as the biggest camera, no multisampling
         xml = f"""<mujoco model="crowdsim">
   <option timestep="0.04"/>
-  <visual><global offwidth="{width}" offheight="{height}"/><quality offsamples="0"/></visual>
+  <visual><global offwidth="{width}" offheight="{height}"/><quality offsamples="0" numslices="16" numstacks="4" numquads="1"/></visual>
   <worldbody>
     <light directional="true" pos="0 0 10" dir="0.2 0.3 -1" castshadow="false"/>
-    <geom name="floor" type="plane" size="0 0 1" rgba=".75 .75 .72 1"/>
+    <geom name="floor" type="plane" pos="{floor_centre[0]:.3f} {floor_centre[1]:.3f} 0" size="{floor_half[0]:.3f} {floor_half[1]:.3f} 1" rgba=".75 .75 .72 1"/>
     {_segment_boxes(walls)}
     {"".join(camera_xml(c) for c in wall_cameras)}
     <body name="robot" mocap="true" pos="0 0 0">
@@ -132,7 +136,8 @@ class Scene:
         self._geom = {part: geoms(f"person{{}}_{part}") for part in ("torso", "head") if part in self.parts}
         if "legs" in self.parts:
             self._geom["legs"] = np.stack([geoms("person{}_left_leg"), geoms("person{}_right_leg")], 1)
-        self._all_person_geoms = np.concatenate([g.reshape(capacity, -1) for g in self._geom.values()], 1) \
+        self._all_person_geoms = np.concatenate([g.reshape(capacity, -1 if capacity else 1)
+                                                 for g in self._geom.values()], 1).astype(np.int64) \
             if self._geom else np.zeros((capacity, 0), np.int64)
         self._geom_slot = np.full(m.ngeom + 1, -1, np.int64)  # the extra entry maps geom id -1 (no hit)
         self._geom_slot[self._all_person_geoms] = np.arange(capacity)[:, None]
@@ -187,6 +192,10 @@ class Scene:
         mujoco.mj_kinematics(m, d)
         if m.ncam:
             mujoco.mj_camlight(m, d)  # camera poses, which mj_kinematics leaves alone
+
+    def person_geoms(self, slots: np.ndarray) -> np.ndarray:
+        """The geom ids of the persons in ``slots``."""
+        return self._all_person_geoms[np.asarray(slots, np.int64)].ravel()
 
     @staticmethod
     def groups_at(height: float) -> np.ndarray:

@@ -1,0 +1,136 @@
+"""``crowdsim bench sensors``: the cost of one call of each sensor with 100 and 500 people, MuJoCo's batched ray call
+beside ``mj_multiRay``, and the robot's sensor mix against real time, side by side in one run.
+
+The people walk the bench hall (crowdsim/bench.py) and are synced into the scene once; the robot stands in the
+middle facing +x. The sensor mix is the issue's: two back-to-back 70 cm lasers at 25 Hz, a 160 x 120 depth camera
+at 15 Hz and a 320 x 240 wall camera at 10 Hz; its real-time factor is one simulated second over the cost of its
+calls in that second (25 scene syncs, 50 scans, 15 depth images, 10 wall images). With cameras the scene holds
+every body part (legs and heads for the images), which the lasers then ray-cast against too.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+
+import numpy as np
+
+from .bench import HALL, _rate, populated_crowd
+
+DEPTH = {"name": "front_depth", "position": [0.45, 0.0, 1.45], "yaw": 0.0, "pitch": 0.1, "fovy_deg": 43.0,
+         "width": 160, "height": 120, "rate": 15.0, "range_min": 0.5, "range_max": 8.0, "noise": "kinect",
+         "rgb": False}
+DEPTH_640 = dict(DEPTH, name="front_depth_640", width=640, height=480)
+WALL = {"name": "wall_cam", "position": [1.0, 1.0, 4.0], "yaw": float(np.pi / 4), "pitch": 0.35, "fovy_deg": 45.0,
+        "width": 320, "height": 240, "rate": 10.0, "rgb": True}
+LASER_HZ, DEPTH_HZ, WALL_HZ = 25.0, 15.0, 10.0
+
+
+def _setup(n_people: int, parts, cameras: bool):
+    from sensors import Laser, Scene
+
+    crowd, scenario = populated_crowd(n_people)
+    for _ in range(25):  # a second of walking: legs mid-stride, headings set
+        crowd.step(0.04)
+    scene = Scene(crowd.walls, 0.425, n_people, parts, robot_cameras=[DEPTH, DEPTH_640] if cameras else [],
+                  wall_cameras=[WALL] if cameras else [])
+    pose = np.array([HALL / 2, HALL / 2, 0.0])
+    sync = lambda: scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked)  # noqa: E731
+    sync()
+    lasers = [Laser(p, scene, np.random.default_rng(k)) for k, p in enumerate(scenario["sensors"]["lasers"])]
+    return scene, pose, sync, lasers, scenario
+
+
+def per_call_ms(n_people: int, quick: bool) -> dict:
+    """Milliseconds per call of each sensor with ``n_people`` in the scene."""
+    from scenarios.format import LASER
+    from scenarios.schema import validate
+    from sensors import Laser
+    from sensors.camera import DepthCamera, WallCamera
+
+    reps = 10 if quick else 60
+    out = {}
+    scene, pose, sync, lasers, _ = _setup(n_people, {"torso"}, cameras=False)
+    out["scene_sync_torsos_only"] = 1e3 / _rate(sync, reps)
+    out["laser_70cm_torsos_only"] = 1e3 / _rate(lambda: lasers[0].scan(0.0, pose), reps)
+    scene, pose, sync, lasers, _ = _setup(n_people, ("torso", "head", "legs"), cameras=True)
+    out["scene_sync"] = 1e3 / _rate(sync, reps)
+    out["laser_70cm_full_bodies"] = 1e3 / _rate(lambda: lasers[0].scan(0.0, pose), reps)
+    leg = Laser(validate({"name": "leg_laser", "mount": [0.25, 0, 0], "preset": "sick_s300"}, LASER, "<bench>"),
+                scene, np.random.default_rng(0))
+    out["laser_38cm_s300_full_bodies"] = 1e3 / _rate(lambda: leg.scan(0.0, pose), reps)
+    depth = DepthCamera(DEPTH, scene, np.random.default_rng(0))
+    out["depth_160x120"] = 1e3 / _rate(lambda: depth.capture(0.0), max(3, reps // 3))
+    depth640 = DepthCamera(DEPTH_640, scene, np.random.default_rng(0))
+    out["depth_640x480"] = 1e3 / _rate(lambda: depth640.capture(0.0), max(2, reps // 10))
+    wall = WallCamera(WALL, scene)
+    out["wall_320x240_rgb_boxes"] = 1e3 / _rate(lambda: wall.capture(0.0), max(3, reps // 3))
+    out["renderer"] = depth.backend
+    out["people_in_wall_image"] = int(len(wall.capture(0.0).ids))
+    return out
+
+
+def batched_rays_us(n_people: int, quick: bool) -> dict:
+    """Two back-to-back lasers' 762 rays: two mj_multiRay calls (one origin each) against one call of MuJoCo's
+    batched ``mujoco.batch.Batch.ray`` with an origin per ray, on one and on two threads."""
+    import mujoco
+    from mujoco import batch
+
+    scene, pose, sync, lasers, _ = _setup(n_people, {"torso"}, cameras=False)
+    origins, dirs = [], []
+    for laser in lasers:
+        p = laser.pose_in(pose)
+        a = p[2] + laser.angles
+        dirs.append(np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], 1))
+        origins.append(np.tile([p[0], p[1], laser.p["height"]], (laser.n_beams, 1)))
+    reps = 20 if quick else 200
+    multiray = 1e6 / _rate(lambda: [laser.scan(0.0, pose) for laser in lasers], reps)
+    out = {"two_mj_multiRay_calls": multiray}
+    for threads in (1, 2):
+        b = batch.Batch(scene.model, nsim=threads, nthread=threads)
+        b.bind("mocap_pos")[:] = scene.data.mocap_pos
+        b.bind("mocap_quat")[:] = scene.data.mocap_quat
+        pnt = np.concatenate(origins).reshape(threads, -1, 3)  # the rays split over the simulations
+        vec = np.concatenate(dirs).reshape(threads, -1, 3)
+        dist, geom = b.ray(pnt, vec, flg_static=True, bodyexclude=scene.robot_body)
+        ref = np.zeros(len(pnt.reshape(-1, 3)))
+        for k, laser in enumerate(lasers):
+            g, d = np.zeros(laser.n_beams, np.int32), np.zeros(laser.n_beams)
+            mujoco.mj_multiRay(scene.model, scene.data, origins[k][0], dirs[k].ravel(), None, 1,
+                               scene.robot_body, g, d, None, laser.n_beams, 1e4)
+            ref[k * laser.n_beams:(k + 1) * laser.n_beams] = d
+        agree = float(np.abs(np.where(dist.ravel() < 0, -1, dist.ravel()) - np.where(ref < 0, -1, ref)).max())
+        out[f"one_Batch_ray_call_{threads}_thread"] = 1e6 / _rate(lambda: b.ray(pnt, vec, bodyexclude=scene.robot_body),
+                                                                   reps)
+        out[f"max_range_difference_m_{threads}_thread"] = agree
+    return out
+
+
+def run_sensor_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
+    print(f"crowdsim bench sensors on {platform.processor() or platform.machine()}, Python "
+          f"{platform.python_version()}{' (quick)' if quick else ''}")
+    figures = {"per_call_ms": {}, "batched_rays_us": {}}
+    for n in (100, 500):
+        calls = figures["per_call_ms"][n] = per_call_ms(n, quick)
+        print(f"\n{n} people (renderer: {calls['renderer']}; {calls['people_in_wall_image']} in the wall image)")
+        for key, value in calls.items():
+            if key not in ("renderer", "people_in_wall_image"):
+                print(f"  {key:40s} {value:9.3f} ms per call", flush=True)
+    rays = figures["batched_rays_us"] = batched_rays_us(100, quick)
+    print("\n762 rays of two lasers, 100 people (torsos):")
+    for key, value in rays.items():
+        print(f"  {key:40s} {value:9.3g} {'m' if key.startswith('max') else 'us per call'}", flush=True)
+    c = figures["per_call_ms"][100]
+    lasers_only = LASER_HZ * (c["scene_sync_torsos_only"] + 2 * c["laser_70cm_torsos_only"]) / 1e3
+    mix = (LASER_HZ * (c["scene_sync"] + 2 * c["laser_70cm_full_bodies"]) + DEPTH_HZ * c["depth_160x120"]
+           + WALL_HZ * c["wall_320x240_rgb_boxes"]) / 1e3
+    figures["realtime_factor_lasers_only"] = 1.0 / lasers_only
+    figures["realtime_factor_sensor_mix"] = 1.0 / mix
+    print(f"\n100 people, sensor cost per simulated second ({c['renderer']}):")
+    print(f"  two lasers @25 Hz (torsos only)          {1 / lasers_only:9.1f} x real time (target 20x)")
+    print(f"  + 160x120 depth @15 Hz + 320x240 wall @10 Hz {1 / mix:6.1f} x real time (target 5x)")
+    if json_path:
+        with open(json_path, "w") as f:
+            json.dump(figures, f, indent=2)
+            f.write("\n")
+    return figures
