@@ -46,7 +46,8 @@ def _cmd_validate_scenario(args) -> int:
     walls = sum(len(w) - 1 for w in sc["map"]["walls"]) + sum(len(o) for o in sc["map"]["obstacles"])
     print(f"{args.file}: valid scenario {sc['name']!r}: {walls} wall segments, "
           + ", ".join(f"{n} {k}" for k, n in counts.items())
-          + f", {len(sc['sensors']['lasers'])} laser(s); seed {sc['seed']}, {sc['duration']:g} s")
+          + f", {len(sc['sensors']['lasers'])} laser(s), {len(sc['sensors']['depth_cameras'])} depth camera(s), "
+          f"{len(sc['sensors']['wall_cameras'])} wall camera(s); seed {sc['seed']}, {sc['duration']:g} s")
     return 0
 
 

@@ -236,7 +236,7 @@ def test_failed_run_leaves_nothing_half_written(tmp_path, monkeypatch, exc):
 def test_validate_scenario_says_what_it_holds_or_names_the_fault(tmp_path, capsys):
     assert main(["validate-scenario", "airport_disembarkation"]) == 0
     out = capsys.readouterr().out
-    assert "valid scenario 'airport_disembarkation'" in out and "2 laser(s)" in out
+    assert "valid scenario 'airport_disembarkation'" in out and "2 laser(s), 0 depth camera(s)" in out
     bad = tmp_path / "bad.yaml"
     bad.write_text("name: x\nrobot: {start: [1, 1, 0]}\nsensors: {lasers: [{name: a, mount: [0, 0, 0]}]}\n"
                    "sources: [{position: [2, 2], rate: -1, routes: {}}]\n")

@@ -319,6 +319,26 @@ def test_every_bundled_scenario_loads():
         assert sc["source"].endswith(f"{name}.yaml")
 
 
+def test_the_camera_variant_adds_the_robot_and_wall_cameras():
+    sc = load_scenario("airport_disembarkation_cameras")
+    cams = sc["sensors"]
+    assert [c["name"] for c in cams["depth_cameras"]] == ["front_depth", "rear_depth"]
+    front = cams["depth_cameras"][0]
+    # the kinect_160 preset fills what the file leaves out; the file's own values win
+    assert (front["width"], front["height"], front["fovy_deg"], front["noise"]) == (160, 120, 43.0, "kinect")
+    assert front["rate"] == 15.0 and front["rgb"] is True
+    assert [c["name"] for c in cams["wall_cameras"]] == ["north_west_cam", "south_east_cam"]
+    assert sc["crowd"] == load_scenario("airport_disembarkation")["crowd"]  # the same crowd as its base
+
+
+def test_sensor_names_must_be_unique(tmp_path):
+    data = yaml.safe_load(open(load_scenario("airport_disembarkation")["source"]).read())
+    data["sensors"]["depth_cameras"] = [{"name": "front_laser"}]
+    path = tmp_path / "dup.yaml"
+    path.write_text(yaml.safe_dump(data))
+    expect_error(path, "sensors.depth_cameras[0].name", "'front_laser' is taken (sensors.lasers[0].name)")
+
+
 def test_airport_has_the_documented_values():
     sc = load_scenario("airport_disembarkation")
     lasers = sc["sensors"]["lasers"]
