@@ -269,6 +269,25 @@ class WallCamera:
     def backend(self) -> str:
         return self.renderer.backend
 
+    def ground_homography(self) -> np.ndarray:
+        """The 3x3 calibration that maps floor points (x, y, 1) in the world to image points (u, v, 1) up to scale
+        (continuous pixel coordinates, pixel u covering [u, u + 1)); its inverse maps the image to the floor, as a
+        wall-camera tracker projects a person's feet onto the ground plane (seed 001)."""
+        origin, rot = camera_pose(self.scene, self.name)
+        k = self.intrinsics
+        K = np.array([[k.f, 0.0, k.centre[0]], [0.0, k.f, k.centre[1]], [0.0, 0.0, 1.0]])
+        # a floor point p = (x, y, 0) sits at rot^T (p - origin) in the optical frame
+        return K @ np.column_stack([rot.T[:, 0], rot.T[:, 1], -rot.T @ origin])
+
+    def image_to_ground(self, uv: np.ndarray) -> np.ndarray:
+        """Floor points [n, 2] seen at image points ``uv`` [n, 2] (NaN for points above the horizon)."""
+        g = np.column_stack([uv, np.ones(len(uv))]) @ np.linalg.inv(self.ground_homography()).T
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xy = g[:, :2] / g[:, 2:]
+        origin, rot = camera_pose(self.scene, self.name)
+        ahead = ((np.column_stack([xy, np.zeros(len(xy))]) - origin) @ rot)[:, 2] > 0
+        return np.where(ahead[:, None], xy, np.nan)
+
     def capture(self, stamp: float) -> CameraFrame:
         out = self.renderer.render(self.name, depth=False, segmentation=True, rgb=self.p["rgb"])
         seg = self.scene.person_of_geom(out["geom"])

@@ -144,3 +144,24 @@ def test_segmentation_agrees_with_laser_hits():
     assert (pixels[in_view & (beams >= 3)] > 0).all()
     assert (beams[in_view & (pixels == 0)] == 0).all()
     assert (beams[in_view] == 0).any() and (beams[in_view] >= 3).any()  # some hidden, some seen
+
+
+def test_wall_camera_calibration_maps_the_image_to_the_floor():
+    scene = Scene(np.array(WALL_X) * 3, 0.425, 1, wall_cameras=[WALL_CAM])
+    scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1]), np.array([[6.0, 0.5]]))
+    camera = WallCamera(WALL_CAM, scene)
+    floor = np.array([[4.0, -1.0], [6.0, 0.5], [9.0, 2.0]])
+    origin, rot = camera_pose(scene, WALL_CAM["name"])
+    uv = Intrinsics(320, 240, 50.0).project((np.column_stack([floor, np.zeros(3)]) - origin) @ rot)
+    h = camera.ground_homography()
+    mapped = np.column_stack([floor, np.ones(3)]) @ h.T
+    np.testing.assert_allclose(mapped[:, :2] / mapped[:, 2:], uv, atol=1e-9)
+    np.testing.assert_allclose(camera.image_to_ground(uv), floor, atol=1e-9)
+    # the person's feet: the lowest visible pixel row of their box, mid-column, lands within 10 cm of their
+    # position's near side (the camera 30 degrees down sees the front of the feet)
+    frame = camera.capture(0.0)
+    u0, v0, u1, v1 = frame.boxes[0]
+    feet = camera.image_to_ground(np.array([[(u0 + u1) / 2, v1]]))[0]
+    assert np.hypot(*(feet - [6.0 - body.LEG_RADIUS, 0.5])) < 0.1
+    # a point above the horizon has no floor under it
+    assert np.isnan(camera.image_to_ground(np.array([[160.0, -500.0]]))).all()
