@@ -165,3 +165,24 @@ def test_wall_camera_calibration_maps_the_image_to_the_floor():
     assert np.hypot(*(feet - [6.0 - body.LEG_RADIUS, 0.5])) < 0.1
     # a point above the horizon has no floor under it
     assert np.isnan(camera.image_to_ground(np.array([[160.0, -500.0]]))).all()
+
+
+def test_a_head_height_depth_camera_sees_the_floor_and_the_heads():
+    # the default robot camera (1.45 m, tilted 0.15 rad down) and a person 3 m ahead: among the person's points
+    # some lie at head height (the head spans 1.52-1.72 m), and the floor shows in front of them
+    cam = dict(DEPTH, position=[0.45, 0.0, 1.45], pitch=0.15)
+    scene = Scene(np.array(WALL_X) * 3, 0.425, 1, robot_cameras=[cam])
+    scene.sync(np.zeros(3), np.array([9]), np.array([[3.5, 0.0]]))
+    camera = DepthCamera(cam, scene, np.random.default_rng(0))
+    frame = camera.capture(0.0)
+    origin, rot = camera_pose(scene, cam["name"])
+    valid = np.isfinite(frame.depth)
+    world = frame.points @ rot.T + origin
+    person = frame.person_id[valid] == 9
+    head = person & (world[:, 2] > body.HEAD_CENTRE - body.HEAD_RADIUS)
+    assert head.sum() > 10
+    # on the head's sphere, to the tessellation MuJoCo draws it with (a few millimetres)
+    np.testing.assert_allclose(np.linalg.norm(world[head] - [3.5, 0.0, body.HEAD_CENTRE], axis=1), body.HEAD_RADIUS,
+                               atol=0.015)
+    floor = ~person & (np.abs(world[:, 2]) < 0.01)
+    assert floor.sum() > 1000 and world[floor, 0].min() < 3.0
