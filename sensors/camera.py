@@ -289,20 +289,32 @@ class WallCamera:
         return np.where(ahead[:, None], xy, np.nan)
 
     def capture(self, stamp: float) -> CameraFrame:
-        out = self.renderer.render(self.name, depth=False, segmentation=True, rgb=self.p["rgb"])
+        out = self.renderer.render(self.name, depth=True, segmentation=True, rgb=self.p["rgb"])
         seg = self.scene.person_of_geom(out["geom"])
-        ids, boxes, full_boxes, fraction = person_boxes(self.scene, self.name, self.intrinsics, seg)
+        # what may stand in front of a person: any drawn geom but the floor, at its depth
+        solid = (out["geom"] >= 0) & (out["geom"] != self.scene.model.geom("floor").id)
+        ids, boxes, full_boxes, fraction = person_boxes(self.scene, self.name, self.intrinsics, seg,
+                                                        np.where(solid, out["depth"], np.inf))
         return CameraFrame(stamp, self.name, out.get("rgb"), seg, ids, boxes, full_boxes, fraction)
 
 
-def person_boxes(scene: Scene, camera: str, intrinsics: Intrinsics, seg: np.ndarray):
+def person_boxes(scene: Scene, camera: str, intrinsics: Intrinsics, seg: np.ndarray,
+                 solid_depth: np.ndarray | None = None):
     """For every person a segmentation image shows: id, box around the visible pixels, box around the person as it
     would show with nobody and nothing in front and no image border (so it may reach outside the image), and the
-    share of those pixels that show."""
+    share of those pixels that show.
+
+    ``solid_depth``: the depth of every pixel that shows something other than the floor (inf elsewhere); with it,
+    a person within the image with nothing nearer than itself in its box is taken as wholly visible, uncast.
+    """
     v, u = np.nonzero(seg >= 0)
     ids, owner, counts = np.unique(seg[v, u], return_inverse=True, return_counts=True)
     boxes = _boxes_of(owner, u, v, len(ids))
-    full_boxes, full_counts = silhouettes(scene, camera, intrinsics, ids, seg)
+    far = None
+    if solid_depth is not None:
+        far = np.zeros(len(ids))
+        np.maximum.at(far, owner, solid_depth[v, u])
+    full_boxes, full_counts = silhouettes(scene, camera, intrinsics, ids, seg, solid_depth, far)
     return ids, boxes, full_boxes, np.minimum(counts / np.maximum(full_counts, 1), 1.0)
 
 
@@ -319,11 +331,13 @@ def _boxes_of(owner: np.ndarray, u: np.ndarray, v: np.ndarray, n: int) -> np.nda
     return boxes
 
 
-def silhouettes(scene: Scene, camera: str, intrinsics: Intrinsics, ids: np.ndarray,
-                seg: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def silhouettes(scene: Scene, camera: str, intrinsics: Intrinsics, ids: np.ndarray, seg: np.ndarray | None = None,
+                solid_depth: np.ndarray | None = None, far: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Box and pixel count of each person (by id) as it would show with nobody and nothing in front: every pixel
     of the person's bounding box ray-cast against that person's own torso, head and legs, all persons at once.
-    With the segmentation ``seg``, the pixels where the person shows are taken as hits without a cast."""
+    With the segmentation ``seg``, the pixels where the person shows are taken as hits without a cast; with
+    ``solid_depth`` and each person's farthest visible depth ``far``, so is all of a person whose box lies within
+    the image and holds nothing nearer than it but the person itself."""
     k = intrinsics
     origin, rot = camera_pose(scene, camera)
     slot_of = {pid: slot for slot, pid in enumerate(scene.slot_person_id[:scene.alive])}
@@ -346,10 +360,16 @@ def silhouettes(scene: Scene, camera: str, intrinsics: Intrinsics, ids: np.ndarr
     u = lo[owner, 0] + local % np.maximum(size[owner, 0], 1)
     v = lo[owner, 1] + local // np.maximum(size[owner, 0], 1)
     hit = np.zeros(len(u), bool)
+    settled = np.zeros(len(slots), bool)  # persons whose silhouette is what shows
     if seg is not None:
         inside = np.flatnonzero((u >= 0) & (u < k.width) & (v >= 0) & (v < k.height))
         hit[inside] = seg[v[inside], u[inside]] == ids[owner[inside]]
-    cast = np.flatnonzero(~hit)
+        if solid_depth is not None:
+            ui, vi, oi = u[inside], v[inside], owner[inside]
+            blocking = ~hit[inside] & (solid_depth[vi, ui] < far[oi])
+            within = (lo >= 0).all(axis=1) & (hi <= [k.width, k.height]).all(axis=1)
+            settled = within & (np.bincount(oi[blocking], minlength=len(slots)) == 0)
+    cast = np.flatnonzero(~hit & ~settled[owner])
     d = np.stack([(u[cast] + 0.5 - k.centre[0]) / k.f, (v[cast] + 0.5 - k.centre[1]) / k.f,
                   np.ones(len(cast))], 1) @ rot.T
     hit[cast] = _hits_persons(scene, slots[owner[cast]], origin, d)
