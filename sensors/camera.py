@@ -370,10 +370,16 @@ def silhouettes(scene: Scene, camera: str, intrinsics: Intrinsics, ids: np.ndarr
             within = (lo >= 0).all(axis=1) & (hi <= [k.width, k.height]).all(axis=1)
             settled = within & (np.bincount(oi[blocking], minlength=len(slots)) == 0)
     cast = np.flatnonzero(~hit & ~settled[owner])
+    weight = np.ones(len(u))
+    if seg is not None:
+        # what hides behind others is cast on every other pixel each way and counted four times, for a quarter
+        # of the work: the visible fraction moves by a few percent (0.45 -> 0.49 for a figure 10 pixels wide)
+        cast = cast[(u[cast] % 2 == 0) & (v[cast] % 2 == 0)]
+        weight[cast] = 4.0
     d = np.stack([(u[cast] + 0.5 - k.centre[0]) / k.f, (v[cast] + 0.5 - k.centre[1]) / k.f,
                   np.ones(len(cast))], 1) @ rot.T
     hit[cast] = _hits_persons(scene, slots[owner[cast]], origin, d)
-    counts = np.bincount(owner[hit], minlength=len(slots))
+    counts = np.bincount(owner[hit], weights=weight[hit], minlength=len(slots))
     return _boxes_of(owner[hit], u[hit], v[hit], len(slots)), counts
 
 
