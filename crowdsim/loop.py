@@ -20,6 +20,7 @@ from pipeline.tracker import NearestNeighbourTracker, TrackerParams
 from pipeline.types import CameraFrame, DepthFrame, DetectedPersons, LaserScan, TrackedPersons, Visibility
 from scenarios.geometry import line_of_sight, wall_segments
 from sensors import Laser, Scene, parts_at
+from sensors.laser import LaserArray
 from sensors.camera import DepthCamera, WallCamera, camera_pose
 from sensors.scene import PARTS
 
@@ -86,6 +87,7 @@ class Simulation:
         self.crowd = Crowd(scenario, rngs[0])
         self.robot = Robot(scenario["robot"], rngs[1])
         self.lasers = [Laser(p, self.scene, rngs[3 + k]) for k, p in enumerate(scenario["sensors"]["lasers"])]
+        self.laser_array = LaserArray(self.lasers, self.scene)  # all lasers due at a tick in one ray call
         pipe = scenario["pipeline"]
         self.detectors = [SegmentDetector(pipe["detector"]) for _ in self.lasers]
         self.tracker = NearestNeighbourTracker(TrackerParams(**pipe["tracker"]), frame=TRACKING_FRAME)
@@ -156,11 +158,9 @@ class Simulation:
             self.timing.sensors_s += time.perf_counter() - t1
             self.timing.wall_s += time.perf_counter() - t0
             return None
-        scans, batches = [], []
-        for k in due:
+        scans, batches = self.laser_array.scan(stamp, self.robot.pose, due), []
+        for k, scan in zip(due, scans):
             self._next_scan[k] += self.lasers[k].period
-            scan = self.lasers[k].scan(stamp, self.robot.pose)
-            scans.append(scan)
             odom_T_laser = self.lasers[k].pose_in(self.robot.odom_pose)
             batches.append(to_frame(self.detectors[k].detect(scan), odom_T_laser, TRACKING_FRAME))
         if len(due) == len(self.lasers):

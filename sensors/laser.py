@@ -47,25 +47,84 @@ class Laser:
         """The laser's pose in the frame ``base_pose`` is given in."""
         return compose(base_pose, self.mount)
 
-    def scan(self, stamp: float, robot_pose: np.ndarray) -> LaserScan:
-        """Cast every beam from the laser's true pose; the scene must be synced to the same instant."""
+    def rays(self, robot_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The beams' common origin [3] and directions [n, 3] in the world, from the laser's true pose."""
         pose = self.pose_in(robot_pose)
         a = pose[2] + self.angles
         self._vec[:, 0] = np.cos(a)
         self._vec[:, 1] = np.sin(a)
-        origin = np.array([pose[0], pose[1], self.p["height"]])
+        return np.array([pose[0], pose[1], self.p["height"]]), self._vec
+
+    def scan(self, stamp: float, robot_pose: np.ndarray) -> LaserScan:
+        """Cast every beam from the laser's true pose; the scene must be synced to the same instant."""
+        origin, vec = self.rays(robot_pose)
         m, d = self.scene.model, self.scene.data
-        mujoco.mj_multiRay(m, d, origin, self._vec.reshape(-1), self._groups, 1, self.scene.robot_body, self._geom,
+        mujoco.mj_multiRay(m, d, origin, vec.reshape(-1), self._groups, 1, self.scene.robot_body, self._geom,
                            self._dist, None, self.n_beams, self.p["range_max"])
-        hit = (self._dist >= self.p["range_min"]) & (self._dist <= self.p["range_max"])
-        ranges = self._dist + self.range_error(self._dist)
+        return self.reading(stamp, self._dist, self._geom)
+
+    def reading(self, stamp: float, dist: np.ndarray, geom: np.ndarray) -> LaserScan:
+        """The scan from the beams' true distances (-1 or beyond range: no return) and hit geoms: range errors,
+        range limits, the no-return value and the ground-truth person per beam."""
+        hit = (dist >= self.p["range_min"]) & (dist <= self.p["range_max"])
+        ranges = dist + self.range_error(dist)
         ranges = np.where(hit, np.clip(ranges, self.p["range_min"], self.p["range_max"]),
                           np.nan if self.p["no_return"] == "nan" else self.p["range_max"])
-        person = np.where(hit, self.scene.person_of_geom(self._geom), -1)
+        person = np.where(hit, self.scene.person_of_geom(geom), -1)
         return LaserScan(stamp, self.name, self.angle_min, self.angle_increment, self.p["range_max"], ranges, person)
+
 
     def range_error(self, true_range: np.ndarray) -> np.ndarray:
         """Each beam's error at these true ranges: its fixed bias plus fresh Gaussian noise, by range band."""
         band = np.searchsorted(self._band_edges, true_range)
         noise = self.rng.standard_normal(self.n_beams) * self._statistical[band]
         return noise + self._bias_share * self._systematic[band]
+
+
+class LaserArray:
+    """Several lasers of one robot cast in one call of MuJoCo's batched ray casting (``mujoco.batch``, MuJoCo 4):
+    every beam from its own origin, the rays shared out over ``threads`` copies of the scene's state. Ranges and
+    hits equal one ``mj_multiRay`` per laser; where ``mujoco.batch`` is missing, that is what runs."""
+
+    def __init__(self, lasers: list[Laser], scene: Scene, threads: int = 2):
+        self.lasers, self.scene = lasers, scene
+        self.batch = None
+        try:
+            from mujoco import batch
+        except ImportError:
+            return
+        self.threads = max(1, threads)
+        self.batch = batch.Batch(scene.model, nsim=self.threads, nthread=self.threads)
+        self._mocap_pos = self.batch.bind("mocap_pos")
+        self._mocap_quat = self.batch.bind("mocap_quat")
+        self._rgba = self.batch.expand("geom_rgba")  # parked people are transparent: the copies must follow
+        self._groups = np.max([laser._groups for laser in lasers], axis=0) if lasers else None
+
+    def scan(self, stamp: float, robot_pose: np.ndarray, which: list[int]) -> list[LaserScan]:
+        """Scans of the lasers ``which`` (indices) at the scene's current state."""
+        if self.batch is None or not which:
+            return [self.lasers[k].scan(stamp, robot_pose) for k in which]
+        origins, vecs = [], []
+        for k in which:
+            origin, vec = self.lasers[k].rays(robot_pose)
+            origins.append(np.broadcast_to(origin, vec.shape))
+            vecs.append(vec.copy())
+        pnt, vec = np.concatenate(origins), np.concatenate(vecs)
+        n = len(pnt)
+        per = -(-n // self.threads)  # rays per copy; the last is padded with repeats of the last ray
+        pad = per * self.threads - n
+        pnt = np.concatenate([pnt, np.repeat(pnt[-1:], pad, 0)]).reshape(self.threads, per, 3)
+        vec = np.concatenate([vec, np.repeat(vec[-1:], pad, 0)]).reshape(self.threads, per, 3)
+        d = self.scene.data
+        self._mocap_pos[:] = d.mocap_pos
+        self._mocap_quat[:] = d.mocap_quat
+        self._rgba[:] = self.scene.model.geom_rgba
+        dist, geom = self.batch.ray(pnt, vec, self._groups, True, self.scene.robot_body)
+        dist, geom = dist.reshape(-1)[:n], geom.reshape(-1)[:n]
+        scans, start = [], 0
+        for k in which:
+            laser = self.lasers[k]
+            part = slice(start, start + laser.n_beams)
+            scans.append(laser.reading(stamp, dist[part], geom[part]))
+            start += laser.n_beams
+        return scans
