@@ -63,13 +63,18 @@ class Simulation:
         self.scenario = scenario
         self.walls = wall_segments(scenario)
         sensors = scenario["sensors"]
-        cameras = sensors["depth_cameras"] or sensors["wall_cameras"]
-        seen = set(PARTS) if cameras else set().union(*(parts_at(laser["height"]) for laser in sensors["lasers"]))
-        self.scene = Scene(self.walls, scenario["robot"]["radius"], scenario["crowd"]["max_agents"], seen,
-                           sensors["depth_cameras"], sensors["wall_cameras"])
+        radius, capacity = scenario["robot"]["radius"], scenario["crowd"]["max_agents"]
+        # the lasers' scene holds only the body parts at their heights (a ray cast costs per geom of the model);
+        # cameras, which see whole people, get a scene of their own
+        seen = set().union(*(parts_at(laser["height"]) for laser in sensors["lasers"]))
+        self.scene = Scene(self.walls, radius, capacity, seen)
+        self.camera_scene = (Scene(self.walls, radius, capacity, PARTS, sensors["depth_cameras"],
+                                   sensors["wall_cameras"])
+                             if sensors["depth_cameras"] or sensors["wall_cameras"] else None)
         # cameras hold GL contexts: made once, kept across resets (their noise streams are reset)
-        self.depth_cameras = [DepthCamera(p, self.scene, np.random.default_rng(0)) for p in sensors["depth_cameras"]]
-        self.wall_cameras = [WallCamera(p, self.scene) for p in sensors["wall_cameras"]]
+        self.depth_cameras = [DepthCamera(p, self.camera_scene, np.random.default_rng(0))
+                              for p in sensors["depth_cameras"]]
+        self.wall_cameras = [WallCamera(p, self.camera_scene) for p in sensors["wall_cameras"]]
         self.max_range = scenario["evaluation"]["max_range"]
         self.dt = scenario["dt"]
         self.reset()
@@ -152,7 +157,10 @@ class Simulation:
             self.timing.wall_s += t1 - t0
             return None
         agents = self.crowd.states()
-        self.scene.sync(self.robot.pose, agents.id, agents.position, agents.velocity, agents.walked)
+        if due:
+            self.scene.sync(self.robot.pose, agents.id, agents.position, agents.velocity, agents.walked)
+        if depth_due or wall_due:
+            self.camera_scene.sync(self.robot.pose, agents.id, agents.position, agents.velocity, agents.walked)
         self._capture_images(stamp, depth_due, wall_due)
         if not due:
             self.timing.sensors_s += time.perf_counter() - t1
@@ -223,7 +231,7 @@ class Simulation:
                 rows = np.searchsorted(agents.id, ids)
                 keep = (rows < n) & (agents.id[np.minimum(rows, n - 1)] == ids)
                 amount[rows[keep], k] = share[keep]
-            origin, rot = camera_pose(self.scene, camera.name)
+            origin, rot = camera_pose(self.camera_scene, camera.name)
             centre = np.column_stack([agents.position, np.full(n, 1.0)])  # the body's middle
             cam = (centre - origin) @ rot
             far = camera.p.get("range_max", np.inf)
