@@ -16,7 +16,13 @@ from . import body
 WALL_HEIGHT = 2.5  # m
 WALL_THICKNESS = 0.1  # m
 PERSON_HIP_RADIUS = body.TORSO_RADIUS  # m, what the lasers at 0.70 m see
-ROBOT_HEIGHT = 1.6  # m
+# the robot's outline, after the SPENCER platform (seed 000): a round base as wide as the footprint up to above the
+# lasers, a narrower upper body, and a head at about 1.6 m carrying the RGB-D cameras
+ROBOT_BASE_HEIGHT = 0.95  # m
+ROBOT_BODY_HALF = (0.18, 0.28)  # m, half depth and half width of the upper body
+ROBOT_HEAD_BOTTOM = 1.45  # m
+ROBOT_HEAD_HALF = (0.14, 0.2)  # m, half depth and half width of the head
+ROBOT_HEIGHT = 1.7  # m, top of the head
 PARKED_Z = -50.0
 PARTS = ("torso", "head", "legs")
 # MuJoCo geom groups, so that a ray cast skips the parts a ray at its height cannot meet (a renderer must turn all
@@ -113,7 +119,12 @@ class Scene:
     {_segment_boxes(walls)}
     {"".join(camera_xml(c) for c in wall_cameras)}
     <body name="robot" mocap="true" pos="0 0 0">
-      <geom type="cylinder" size="{robot_radius} {ROBOT_HEIGHT / 2}" pos="0 0 {ROBOT_HEIGHT / 2}" rgba=".2 .3 .8 1"/>
+      <geom type="cylinder" size="{robot_radius} {ROBOT_BASE_HEIGHT / 2}" pos="0 0 {ROBOT_BASE_HEIGHT / 2}"
+            rgba=".85 .85 .88 1"/>
+      <geom type="box" size="{ROBOT_BODY_HALF[0]} {ROBOT_BODY_HALF[1]} {(ROBOT_HEAD_BOTTOM - ROBOT_BASE_HEIGHT) / 2}"
+            pos="0 0 {(ROBOT_HEAD_BOTTOM + ROBOT_BASE_HEIGHT) / 2}" rgba=".2 .3 .8 1"/>
+      <geom type="box" size="{ROBOT_HEAD_HALF[0]} {ROBOT_HEAD_HALF[1]} {(ROBOT_HEIGHT - ROBOT_HEAD_BOTTOM) / 2}"
+            pos="0 0 {(ROBOT_HEIGHT + ROBOT_HEAD_BOTTOM) / 2}" rgba=".85 .85 .88 1"/>
       {"".join(camera_xml(c) for c in robot_cameras)}
     </body>
     {persons}
