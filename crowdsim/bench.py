@@ -67,11 +67,12 @@ def bench_crowd(n_agents: int, quick: bool) -> float:
 
 def bench_laser(n_people: int, quick: bool) -> float:
     from sensors import Laser, Scene, parts_at
+    from sensors.body import body_scale
 
     crowd, scenario = populated_crowd(n_people)
     scene = Scene(crowd.walls, 0.425, n_people, parts_at(scenario["sensors"]["lasers"][0]["height"]))
     pose = np.array([HALL / 2, HALL / 2, 0.0])
-    scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked)
+    scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked, body_scale(crowd.id, crowd.radius))
     laser = Laser(scenario["sensors"]["lasers"][0], scene, np.random.default_rng(0))
     return _rate(lambda: laser.scan(0.0, pose), 50 if quick else 400)
 

@@ -28,6 +28,7 @@ LASER_HZ, DEPTH_HZ, WALL_HZ = 25.0, 15.0, 10.0
 
 def _setup(n_people: int, parts, cameras: bool):
     from sensors import Laser, Scene
+    from sensors.body import body_scale
 
     crowd, scenario = populated_crowd(n_people)
     for _ in range(25):  # a second of walking: legs mid-stride, headings set
@@ -35,7 +36,8 @@ def _setup(n_people: int, parts, cameras: bool):
     scene = Scene(crowd.walls, 0.425, n_people, parts, robot_cameras=[DEPTH, DEPTH_640] if cameras else [],
                   wall_cameras=[WALL] if cameras else [])
     pose = np.array([HALL / 2, HALL / 2, 0.0])
-    sync = lambda: scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked)  # noqa: E731
+    scale = body_scale(crowd.id, crowd.radius)
+    sync = lambda: scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked, scale)  # noqa: E731
     sync()
     lasers = [Laser(p, scene, np.random.default_rng(k)) for k, p in enumerate(scenario["sensors"]["lasers"])]
     return scene, pose, sync, lasers, scenario

@@ -20,6 +20,7 @@ from pipeline.tracker import NearestNeighbourTracker, TrackerParams
 from pipeline.types import CameraFrame, DepthFrame, DetectedPersons, LaserScan, TrackedPersons, Visibility
 from scenarios.geometry import line_of_sight, wall_segments
 from sensors import Laser, Scene, parts_at
+from sensors.body import body_scale
 from sensors.laser import LaserArray
 from sensors.camera import DepthCamera, WallCamera, camera_pose
 from sensors.scene import PARTS
@@ -157,10 +158,11 @@ class Simulation:
             self.timing.wall_s += t1 - t0
             return None
         agents = self.crowd.states()
+        person = (agents.id, agents.position, agents.velocity, agents.walked, body_scale(agents.id, agents.radius))
         if due:
-            self.scene.sync(self.robot.pose, agents.id, agents.position, agents.velocity, agents.walked)
+            self.scene.sync(self.robot.pose, *person)
         if depth_due or wall_due:
-            self.camera_scene.sync(self.robot.pose, agents.id, agents.position, agents.velocity, agents.walked)
+            self.camera_scene.sync(self.robot.pose, *person)
         self._capture_images(stamp, depth_due, wall_due)
         if not due:
             self.timing.sensors_s += time.perf_counter() - t1

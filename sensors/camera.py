@@ -114,12 +114,13 @@ class GLRenderer:
         """Geoms of the persons whose bounding sphere lies wholly outside the camera's view: drawing costs per geom
         under Mesa, wherever the geom lands, so these are hidden while the camera draws."""
         s = self.scene
-        centre = np.column_stack([s.person_xy[:s.alive], np.full(s.alive, body.HEIGHT / 2)])
+        size = s.person_scale[:s.alive]
+        centre = np.column_stack([s.person_xy[:s.alive], body.HEIGHT / 2 * size])
         origin, rot = camera_pose(s, camera)
         c = (centre - origin) @ rot
         k = self.intrinsics
         tan_x, tan_y = k.width / 2 / k.f, k.height / 2 / k.f
-        r = body.HEIGHT / 2 + body.LEG_LENGTH * np.sin(body.SWING_AMPLITUDE)  # the sphere round a whole person
+        r = (body.HEIGHT / 2 + body.LEG_LENGTH * np.sin(body.SWING_AMPLITUDE)) * size  # a sphere round each person
         outside = ((c[:, 2] < -r) | (np.abs(c[:, 0]) - r * np.hypot(1, tan_x) > c[:, 2] * tan_x)
                    | (np.abs(c[:, 1]) - r * np.hypot(1, tan_y) > c[:, 2] * tan_y))
         return s.person_geoms(np.flatnonzero(outside))
@@ -345,7 +346,8 @@ def silhouettes(scene: Scene, camera: str, intrinsics: Intrinsics, ids: np.ndarr
     # each person's bounding box (legs may swing out of the torso) projected: the pixels to cast
     reach = body.TORSO_RADIUS + body.LEG_LENGTH * np.sin(body.SWING_AMPLITUDE)
     offsets = np.array([[sx * reach, sy * reach, z] for sx in (-1, 1) for sy in (-1, 1) for z in (0.0, body.HEIGHT)])
-    corners = np.concatenate([scene.person_xy[slots], np.zeros((len(slots), 1))], 1)[:, None, :] + offsets
+    corners = (np.concatenate([scene.person_xy[slots], np.zeros((len(slots), 1))], 1)[:, None, :]
+               + offsets * scene.person_scale[slots][:, None, None])
     cam = (corners - origin) @ rot
     in_front = (cam[..., 2] > 1e-3).all(axis=1)
     uv = k.project(np.where(in_front[:, None, None], cam, 1.0).reshape(-1, 3)).reshape(len(slots), 8, 2)
@@ -390,14 +392,15 @@ def _hits_persons(scene: Scene, slot: np.ndarray, o: np.ndarray, d: np.ndarray) 
     runs on every pixel of every person's box."""
     f = np.float32
     x, y = scene.person_xy[slot].T.astype(f)
+    k = scene.person_scale[slot].astype(f)  # each body's own size
     ox, oy, oz = (f(c) for c in o)
     dx, dy, dz = d.T.astype(f)
-    hit = _ray_vertical_cylinder(ox - x, oy - y, oz, dx, dy, dz, f(body.TORSO_RADIUS), f(body.TORSO_BOTTOM),
-                                 f(body.TORSO_TOP))
-    hit |= _ray_sphere(ox - x, oy - y, oz - f(body.HEAD_CENTRE), dx, dy, dz, f(body.HEAD_RADIUS))
+    hit = _ray_vertical_cylinder(ox - x, oy - y, oz, dx, dy, dz, f(body.TORSO_RADIUS) * k, f(body.TORSO_BOTTOM) * k,
+                                 f(body.TORSO_TOP) * k)
+    hit |= _ray_sphere(ox - x, oy - y, oz - f(body.HEAD_CENTRE) * k, dx, dy, dz, f(body.HEAD_RADIUS) * k)
     for leg in (0, 1):
         a, b = scene.hips[slot, leg].astype(f), scene.feet[slot, leg].astype(f)
-        hit |= _ray_capsule(ox - a[:, 0], oy - a[:, 1], oz - a[:, 2], dx, dy, dz, b - a, f(body.LEG_RADIUS))
+        hit |= _ray_capsule(ox - a[:, 0], oy - a[:, 1], oz - a[:, 2], dx, dy, dz, b - a, f(body.LEG_RADIUS) * k)
     return hit
 
 
@@ -417,8 +420,8 @@ def _ray_vertical_cylinder(px, py, oz, dx, dy, dz, r, z0, z1) -> np.ndarray:
         za, zb = (z0 - oz) / dz, (z1 - oz) / dz
         level = np.abs(dz) < 1e-12
         inside = (z0 <= oz) & (oz <= z1)
-        tz0 = np.where(level, -np.inf if inside else np.inf, np.minimum(za, zb))
-        tz1 = np.where(level, np.inf if inside else -np.inf, np.maximum(za, zb))
+        tz0 = np.where(level, np.where(inside, -np.inf, np.inf), np.minimum(za, zb))
+        tz1 = np.where(level, np.where(inside, np.inf, -np.inf), np.maximum(za, zb))
     enter = np.maximum(np.maximum(t0, tz0), 0)
     return (disc >= 0) & (enter <= np.minimum(t1, tz1))
 

@@ -97,7 +97,9 @@ class LaserArray:
         self.batch = batch.Batch(scene.model, nsim=self.threads, nthread=self.threads)
         self._mocap_pos = self.batch.bind("mocap_pos")
         self._mocap_quat = self.batch.bind("mocap_quat")
-        self._rgba = self.batch.expand("geom_rgba")  # parked people are transparent: the copies must follow
+        # the copies must follow what sync changes in the model: transparency (parked people), sizes and bounds
+        self._fields = ("geom_rgba", "geom_size", "geom_pos", "geom_rbound", "geom_aabb")
+        self._copies = [self.batch.expand(name) for name in self._fields]
         self._groups = np.max([laser._groups for laser in lasers], axis=0) if lasers else None
 
     def scan(self, stamp: float, robot_pose: np.ndarray, which: list[int]) -> list[LaserScan]:
@@ -118,7 +120,8 @@ class LaserArray:
         d = self.scene.data
         self._mocap_pos[:] = d.mocap_pos
         self._mocap_quat[:] = d.mocap_quat
-        self._rgba[:] = self.scene.model.geom_rgba
+        for name, copy in zip(self._fields, self._copies):
+            copy[:] = getattr(self.scene.model, name)
         dist, geom = self.batch.ray(pnt, vec, self._groups, True, self.scene.robot_body)
         dist, geom = dist.reshape(-1)[:n], geom.reshape(-1)[:n]
         scans, start = [], 0

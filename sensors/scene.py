@@ -32,14 +32,8 @@ STATIC_GROUP, TORSO_GROUP, HEAD_GROUP, LEG_GROUP = 0, 1, 2, 3
 
 def parts_at(height: float) -> set[str]:
     """The body parts a horizontal ray at ``height`` above the floor can meet."""
-    parts = set()
-    if body.TORSO_BOTTOM <= height <= body.TORSO_TOP:
-        parts.add("torso")
-    if abs(height - body.HEAD_CENTRE) <= body.HEAD_RADIUS:
-        parts.add("head")
-    if body.legs_show_at(height):
-        parts.add("legs")
-    return parts
+    return {part for part, seen in (("torso", body.torso_at(height)), ("head", body.head_at(height)),
+                                    ("legs", body.legs_show_at(height))) if seen}
 
 
 def _segment_boxes(segs: np.ndarray) -> str:
@@ -152,6 +146,10 @@ class Scene:
             if self._geom else np.zeros((capacity, 0), np.int64)
         self._geom_slot = np.full(m.ngeom + 1, -1, np.int64)  # the extra entry maps geom id -1 (no hit)
         self._geom_slot[self._all_person_geoms] = np.arange(capacity)[:, None]
+        # the adult body's geom sizes, positions and bounds, which every person's own scale multiplies
+        g = self._all_person_geoms
+        self._base = [m.geom_size[g].copy(), m.geom_pos[g].copy(), m.geom_rbound[g].copy(), m.geom_aabb[g].copy()]
+        self.person_scale = np.ones(capacity)
         self.slot_person_id = np.full(capacity, -1, np.int64)
         self.alive = 0
         self.person_xy = np.zeros((capacity, 2))
@@ -162,11 +160,13 @@ class Scene:
         m.geom_rgba[self._all_person_geoms.ravel(), 3] = 0.0
 
     def sync(self, robot_pose: np.ndarray, person_ids: np.ndarray, person_xy: np.ndarray,
-             person_velocity: np.ndarray | None = None, person_walked: np.ndarray | None = None) -> None:
+             person_velocity: np.ndarray | None = None, person_walked: np.ndarray | None = None,
+             person_scale: np.ndarray | None = None) -> None:
         """Place the robot and the persons (slot k holds the k-th person given); park the unused slots.
 
         With velocities and distances walked the legs swing at each person's gait phase, facing the walking
-        direction; without them everyone stands with legs straight.
+        direction; without them everyone stands with legs straight. ``person_scale`` sizes each body
+        (``body.body_scale``; the adult body without it).
         """
         n = len(person_ids)
         if n > self.capacity:
@@ -182,10 +182,21 @@ class Scene:
         d.mocap_quat[torso] = np.stack([np.cos(heading / 2), np.zeros(n), np.zeros(n), np.sin(heading / 2)], 1)
         d.mocap_pos[parked] = (0.0, 0.0, PARKED_Z)
         walked = np.zeros(n) if person_walked is None else np.asarray(person_walked, float)
-        swing = body.leg_swing(walked, np.linalg.norm(vel, axis=1))
-        hips, leg_quat = body.leg_poses(xy, heading, swing)
+        scale = np.ones(n) if person_scale is None else np.asarray(person_scale, float)
+        if (scale < body.MIN_SCALE - 1e-9).any() or (scale > body.MAX_SCALE + 1e-9).any():
+            raise ValueError(f"body scales must lie in [{body.MIN_SCALE}, {body.MAX_SCALE}]")
+        swing = body.leg_swing(walked, np.linalg.norm(vel, axis=1), scale)
+        hips, leg_quat = body.leg_poses(xy, heading, swing, scale)
         self.alive = n
-        self.person_xy[:n], self.hips[:n], self.feet[:n] = xy, hips, body.feet(hips, heading, swing)
+        self.person_xy[:n], self.hips[:n] = xy, hips
+        self.feet[:n], self.person_scale[:n] = body.feet(hips, heading, swing, scale), scale
+        # each body at its own size: MuJoCo reads geom sizes and positions each draw and ray cast, and culls rays
+        # by the bounding radii and boxes, which scale with them
+        g, k = self._all_person_geoms[:n], scale[:, None, None]
+        m.geom_size[g] = self._base[0][:n] * k
+        m.geom_pos[g] = self._base[1][:n] * k
+        m.geom_rbound[g] = self._base[2][:n] * scale[:, None]
+        m.geom_aabb[g] = self._base[3][:n] * k
         if "legs" in self.parts:
             legs = self._leg_mocap[:n]
             d.mocap_pos[legs], d.mocap_quat[legs] = hips, leg_quat

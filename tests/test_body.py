@@ -140,3 +140,42 @@ def test_a_ray_cast_skips_only_parts_it_cannot_meet():
                                None, 3600, 20.0)
             out[key] = dist
         np.testing.assert_array_equal(out["all"], out["torsos"])
+
+
+def test_bodies_are_sized_by_the_crowd_radius_with_a_jitter_fixed_by_id():
+    ids = np.arange(1, 2001)
+    adults, children = body.body_scale(ids, np.full(2000, 0.25)), body.body_scale(ids, np.full(2000, 0.18))
+    assert adults.min() >= 0.96 - 1e-9 and adults.max() <= 1.04 + 1e-9 and adults.std() > 0.015
+    np.testing.assert_allclose(children / adults, 0.18 / 0.25)  # the same jitter, on a child's size
+    np.testing.assert_array_equal(body.body_scale(ids, np.full(2000, 0.25)), adults)  # fixed by the id
+
+
+def test_a_laser_sees_each_body_at_its_own_size_as_slots_change_hands():
+    # a person 3 m ahead of a 70 cm laser at the origin (mount 0.25 m): the nearest return is 3 - 0.25 - 0.18 s;
+    # a child (s 0.72) first, then an adult (s 1.0) in the same slot, then the child again
+    scene = Scene(np.array(FAR_WALL), 0.425, 1, parts={"torso"})
+    params = validate({"name": "l", "mount": [0.25, 0.0, 0.0], "noise": []}, LASER, "<test>")
+    laser = Laser(params, scene, np.random.default_rng(0))
+    for scale in (0.72, 1.0, 0.72):
+        scene.sync(np.zeros(3), np.array([1]), np.array([[3.0, 0.0]]), person_scale=np.array([scale]))
+        scan = laser.scan(0.0, np.zeros(3))
+        assert np.nanmin(scan.ranges) == pytest.approx(3.0 - 0.25 - body.TORSO_RADIUS * scale, abs=1e-9)
+    with pytest.raises(ValueError, match="body scales"):
+        scene.sync(np.zeros(3), np.array([1]), np.array([[3.0, 0.0]]), person_scale=np.array([2.0]))
+
+
+def test_a_childs_head_is_lower_in_the_depth_image():
+    # a level camera at 1.0 m, a child (s 0.72) 4 m ahead: the topmost pixel showing the child looks at the top
+    # of the head, 1.72 x 0.72 = 1.24 m, that is atan(0.24 / 3.9) above the horizon
+    from sensors.camera import DepthCamera, Intrinsics
+
+    cam = {"name": "c", "position": [0.0, 0.0, 1.0], "yaw": 0.0, "pitch": 0.0, "fovy_deg": 43.0, "width": 160,
+           "height": 120, "rate": 15.0, "range_min": 0.5, "range_max": 8.0, "noise": "none", "rgb": False}
+    scene = Scene(np.array(FAR_WALL), 0.425, 1, robot_cameras=[cam])
+    scene.sync(np.array([0.0, 0.0, 0.0]), np.array([3]), np.array([[4.0, 0.0]]), person_scale=np.array([0.72]))
+    frame = DepthCamera(cam, scene, np.random.default_rng(0)).capture(0.0)
+    rows = np.flatnonzero((frame.person_id == 3).any(axis=1))
+    k = Intrinsics(160, 120, 43.0)
+    top = body.HEIGHT * 0.72
+    expect_row = k.centre[1] - k.f * (top - 1.0) / (4.0 - body.HEAD_RADIUS * 0.72)  # the head's nearest side
+    assert abs(rows.min() - expect_row) <= 1.5
