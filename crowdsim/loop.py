@@ -240,7 +240,7 @@ class Simulation:
             ahead = (cam[:, 2] > 0.05) & (cam[:, 2] <= far)
             size = camera.intrinsics
             uv = size.project(np.where(ahead[:, None], cam, [0.0, 0.0, 1.0]))
-            in_view[:, k] = ahead & (uv[:, 0] >= 0) & (uv[:, 0] < size.width) & (uv[:, 1] >= 0) & (uv[:, 1] < size.height)
+            in_view[:, k] = ahead & (uv >= 0).all(axis=1) & (uv[:, 0] < size.width) & (uv[:, 1] < size.height)
         return Visibility(agents.id.copy(), names, amount, in_view)
 
     def frames(self, duration: float):

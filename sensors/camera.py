@@ -215,7 +215,8 @@ def kinect_noise(depth: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Khoshelham & Elberink's Kinect depth error: Gaussian with sigma 1.425e-3 z^2, then quantization of the
     disparity to 1/8 pixel."""
     seen = np.isfinite(depth)
-    noisy = np.where(seen, depth, 0.0) + rng.standard_normal(depth.shape) * (KINECT_SIGMA * np.where(seen, depth, 0.0) ** 2)
+    z = np.where(seen, depth, 0.0)
+    noisy = z + rng.standard_normal(depth.shape) * (KINECT_SIGMA * z * z)
     fb = KINECT_FOCAL_PX * KINECT_BASELINE * KINECT_SUBPIXEL
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(seen, fb / np.round(fb / noisy), np.inf).astype(np.float32)

@@ -186,3 +186,15 @@ def test_a_head_height_depth_camera_sees_the_floor_and_the_heads():
                                atol=0.015)
     floor = ~person & (np.abs(world[:, 2]) < 0.01)
     assert floor.sum() > 1000 and world[floor, 0].min() < 3.0
+
+
+def test_without_gl_the_cameras_fall_back_to_ray_casting_and_say_so(monkeypatch):
+    scene, cam = depth_scene()
+    scene.sync(np.zeros(3), np.zeros(0, np.int64), np.zeros((0, 2)))
+    monkeypatch.setenv("MUJOCO_GL", "disable")
+    camera = DepthCamera(cam, scene, np.random.default_rng(0))
+    assert camera.backend == "raycast"
+    frame = camera.capture(0.0)
+    wall = np.abs(expected_depth(cam) - 4.5) < 1e-9
+    np.testing.assert_allclose(frame.depth[wall], 4.5, atol=1e-6)
+    assert WallCamera(WALL_CAM, Scene(np.array(WALL_X), 0.425, 1, wall_cameras=[WALL_CAM])).backend == "raycast"
