@@ -178,7 +178,8 @@ DEPTH_CAMERA_PRESETS = {
 
 DEPTH_CAMERA = Schema({
     "name": F("str", required=True, doc="the camera's optical frame name"),
-    "preset": F("str", None, choices=tuple(DEPTH_CAMERA_PRESETS), doc="a camera model whose values fill the keys not given"),
+    "preset": F("str", None, choices=tuple(DEPTH_CAMERA_PRESETS),
+                doc="a camera model whose values fill the keys not given"),
     "position": F("point3", [0.45, 0.0, 1.45],
                   doc="m, in base_link (SPENCER: RGB-D cameras at head height, front and rear)"),
     "yaw": F("float", 0.0, doc="rad, viewing direction in base_link (pi: looking backwards)"),
