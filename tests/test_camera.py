@@ -101,7 +101,8 @@ def test_wall_camera_box_of_a_person_is_its_projection_within_a_pixel():
     ring = lambda c, r, z: np.stack([c[0] + r * np.cos(a), c[1] + r * np.sin(a), np.full_like(a, z)], 1)  # noqa: E731
     surface = [ring((6.0, 0.5), body.TORSO_RADIUS, z) for z in (body.TORSO_BOTTOM, body.TORSO_TOP)]
     for lat in np.linspace(-np.pi / 2, np.pi / 2, 181):  # the head
-        surface.append(ring((6.0, 0.5), body.HEAD_RADIUS * np.cos(lat), body.HEAD_CENTRE + body.HEAD_RADIUS * np.sin(lat)))
+        r, z = body.HEAD_RADIUS * np.cos(lat), body.HEAD_CENTRE + body.HEAD_RADIUS * np.sin(lat)
+        surface.append(ring((6.0, 0.5), r, z))
     for side in (1, -1):  # straight legs: vertical capsules from the floor to the hip
         for z in np.linspace(0.0, body.HIP_HEIGHT, 60):
             surface.append(ring((6.0, 0.5 + side * body.HIP_HALF_WIDTH), body.LEG_RADIUS, z))

@@ -3,7 +3,8 @@
 Geometry used throughout: a wall segment from (5, -30) to (5, 30) is a box of thickness WALL_THICKNESS = 0.1 centred
 on the segment, so the face the robot sees is the plane x = 5 - 0.05 = 4.95 (and x = -4.95 for the wall at x = -5).
 A person is a vertical cylinder of radius PERSON_HIP_RADIUS = 0.18; the beams are horizontal at 0.70 m, below the
-wall top (2.5 m), the person's torso (0.62-1.45 m) and the robot's base (0.95 m), so they meet each solid in its 2D section.
+wall top (2.5 m), within the person's torso (0.62-1.45 m) and below the robot's base top (0.95 m), so they meet
+each solid in its 2D section.
 """
 
 import mujoco
