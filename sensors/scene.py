@@ -1,6 +1,6 @@
 """The MuJoCo scene: static walls and obstacles, the robot and a pool of person bodies moved as mocap bodies.
 
-No contact physics runs: bodies are placed every tick and MuJoCo is used for ray casting (and later rendering).
+No contact physics runs: bodies are placed every tick and MuJoCo is used for ray casting and rendering.
 A person is a torso body (with the head) and two leg bodies (see sensors/body.py). The scene holds only the parts
 its sensors can see (two 70 cm lasers see torsos only): MuJoCo's ray casting tests every geom of the model, so parts
 nobody sees would only cost time. Slots beyond the number alive are parked below the floor and made transparent.
