@@ -33,8 +33,10 @@ def _cmd_run(args) -> int:
 def _cmd_scenarios(args) -> int:
     from scenarios import bundled_scenarios
 
-    for name, description in bundled_scenarios().items():
-        print(f"{name:28s} {description}")
+    scenarios = bundled_scenarios()
+    width = max(map(len, scenarios), default=0)
+    for name, description in scenarios.items():
+        print(f"{name:{width}s}  {description}")
     return 0
 
 
