@@ -146,7 +146,7 @@ ROBOT = Schema({
 NOISE_BAND = Schema({
     "up_to": F("float", required=True, min=0.0, exclusive_min=True, doc="m, the band covers ranges up to this"),
     "systematic": F("float", 0.0, min=0.0,
-                    doc="m, +- bound of a fixed per-beam bias (drawn uniformly once per laser)"),
+                    doc="m, +- bound of the laser's offset (drawn uniformly once per laser, the same on every beam)"),
     "statistical": F("float", 0.0, min=0.0, doc="m, 1-sigma Gaussian noise drawn anew for every return"),
 })
 

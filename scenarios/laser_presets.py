@@ -1,7 +1,8 @@
 """Datasheet models of the 2D lasers of the seeds, for the scenario key ``sensors.lasers[i].preset``.
 
-Range error: each band gives, up to its range, the systematic error (a bias fixed per beam, within +- the bound)
-and the statistical error (1 sigma, drawn anew for every return), as the manufacturers state them.
+Range error: each band gives, up to its range, the systematic error (an offset of the laser's readings, within +-
+the bound, drawn once per laser and the same on every beam) and the statistical error (1 sigma, drawn anew for every
+return), as the manufacturers state them.
 
 * ``sick_lms500``: the SPENCER robot's two back-to-back lasers (seed 000: SICK LMS 500 at 70 cm, 190 degrees at
   0.25 or 0.5 degrees, 25 or 50 Hz, detections up to 20 m). Errors from SICK's knowledge base "Measurement errors

@@ -1,6 +1,7 @@
 """2D laser scanners ray-cast with MuJoCo: one batched ``mj_multiRay`` call per scan, and the range error of the
-datasheets: a bias fixed per beam (the systematic error) plus Gaussian noise per return (the statistical error),
-both by range band (see scenarios/laser_presets.py)."""
+datasheets: a bias fixed per laser (the systematic error: a calibration offset, the same on every beam, so a flat wall
+stays flat) plus Gaussian noise per return (the statistical error), both by range band (see
+scenarios/laser_presets.py)."""
 
 from __future__ import annotations
 
@@ -36,8 +37,8 @@ class Laser:
         self._band_edges = np.array([b["up_to"] for b in bands[:-1]])
         self._systematic = np.array([b["systematic"] for b in bands] or [0.0])
         self._statistical = np.array([b["statistical"] for b in bands] or [0.0])
-        # where each beam's fixed bias lies within +- the systematic bound: drawn once, so a beam repeats its bias
-        self._bias_share = rng.uniform(-1.0, 1.0, self.n_beams)
+        # where this laser's offset lies within +- the systematic bound: drawn once, the same for every beam and scan
+        self._bias_share = float(rng.uniform(-1.0, 1.0))
         self._vec = np.zeros((self.n_beams, 3))
         self._dist = np.zeros(self.n_beams)
         self._geom = np.zeros(self.n_beams, np.int32)
@@ -75,7 +76,7 @@ class Laser:
 
 
     def range_error(self, true_range: np.ndarray) -> np.ndarray:
-        """Each beam's error at these true ranges: its fixed bias plus fresh Gaussian noise, by range band."""
+        """Each beam's error at these true ranges: the laser's offset plus fresh Gaussian noise, by range band."""
         band = np.searchsorted(self._band_edges, true_range)
         noise = self.rng.standard_normal(self.n_beams) * self._statistical[band]
         return noise + self._bias_share * self._systematic[band]

@@ -83,14 +83,14 @@ def test_noisy_ranges_match_wall_and_person_within_noise():
     # Robot at the origin, laser at (0.25, 0) facing +x, person (id 7) at (3, 1).
     # Wall beams: t = (4.95 - 0.25) / cos(a), a hit while t <= 20 m, i.e. |a| <= acos(4.7 / 20) = 76.4 deg.
     # Person beams: t = b - sqrt(b^2 - |c - o|^2 + r^2), b = u . (c - o), for |a - atan2(1, 2.75)| <= asin(r/|c-o|).
-    # The default noise is the LMS500's: a bias within +-25 mm (+-35 mm beyond 10 m) and 7 mm (9 mm) sigma.
+    # The default noise is the LMS500's: an offset within +-25 mm (+-35 mm beyond 10 m) and 7 mm (9 mm) sigma.
     _, laser = make([FRONT_WALL], persons=[(3.0, 1.0)], ids=[7], seed=2)
     scan = laser.scan(0.0, np.zeros(3))
     pose = laser.pose_in(np.zeros(3))
     np.testing.assert_allclose(pose, [0.25, 0.0, 0.0])
     expect, which = analytic_ranges(pose, laser.angles, faces=[FACE], circles=[(3.0, 1.0)])
 
-    # the same beams return, and every return is within its bias bound plus 4 sigma of the exact range
+    # the same beams return, and every return is within the offset bound plus 4 sigma of the exact range
     np.testing.assert_array_equal(np.isfinite(scan.ranges), np.isfinite(expect))
     hit = np.isfinite(expect)
     bound = np.where(expect[hit] <= 10.0, 0.025 + 4 * 0.007, 0.035 + 4 * 0.009)
@@ -105,40 +105,45 @@ def test_noisy_ranges_match_wall_and_person_within_noise():
     np.testing.assert_array_equal(scan.person_id, np.where(on_person, 7, -1))
 
 
-def room_lasers(preset: str, half: float, **over):
+def room_lasers(preset: str, half: float, seed: int = 5, **over):
     """A noisy laser of ``preset`` turned 360 degrees in 10,000 beams at the centre of a square room of walls at
     +-``half`` m, and its noise-free twin (whose ranges the tests above prove exact)."""
     walls = [[[-half, -half], [half, -half]], [[half, -half], [half, half]], [[half, half], [-half, half]],
              [[-half, half], [-half, -half]]]
     params = dict(preset=preset, mount=[0.0, 0.0, 0.0], fov_deg=360.0, resolution_deg=0.036, **over)
-    scene, noisy = make(walls, seed=5, **params)
+    scene, noisy = make(walls, seed=seed, **params)
     exact = Laser(laser_params(**dict(params, noise=[])), scene, np.random.default_rng(0))
     return noisy, exact.scan(0.0, np.zeros(3)).ranges
 
 
 def test_range_error_over_10000_beams_matches_the_lms500_datasheet():
-    # walls 4.95 m from the centre: every range is within 7.0 m, in the 1-10 m band: bias uniform in +-25 mm
-    # (sd 25 / sqrt 3 = 14.4 mm) plus 7 mm Gaussian noise: over the beams, mean 0 and sd sqrt(7^2 + 14.4^2) = 16.0 mm
+    # walls 4.95 m from the centre: every range is within 7.0 m, in the 1-10 m band: the laser's offset (within
+    # +-25 mm, the same on every beam) plus 7 mm Gaussian noise: over the beams, the mean is the offset and the
+    # sd 7 mm, so a flat wall stays flat
     noisy, exact = room_lasers("sick_lms500", 5.0)
     assert noisy.n_beams == 10_000 and np.isfinite(exact).all() and exact.max() < 7.1
     err = noisy.scan(0.0, np.zeros(3)).ranges - exact
-    assert abs(err.mean()) <= 4 * 0.016 / np.sqrt(err.size)
-    assert err.std() == pytest.approx(np.hypot(0.007, 0.025 / np.sqrt(3)), rel=0.05)
-    # over 100 scans, each beam repeats its bias (within +-25 mm, spread as a uniform) and scatters by 7 mm about it
+    offset = noisy._bias_share * 0.025
+    assert abs(offset) <= 0.025 and abs(offset) > 1e-4
+    assert err.mean() == pytest.approx(offset, abs=4 * 0.007 / np.sqrt(err.size))
+    assert err.std() == pytest.approx(0.007, rel=0.05)
+    # over 100 scans every beam keeps the offset and scatters by 7 mm about it
     errs = np.stack([noisy.scan(0.0, np.zeros(3)).ranges - exact for _ in range(100)])
-    bias = errs.mean(axis=0)
-    assert np.abs(bias).max() <= 0.025 + 4 * 0.007 / np.sqrt(100)
-    assert bias.std() == pytest.approx(0.025 / np.sqrt(3), rel=0.05)
-    assert (errs - bias).std(ddof=1) == pytest.approx(0.007, rel=0.05)
+    np.testing.assert_allclose(errs.mean(axis=0), offset, atol=5 * 0.007 / np.sqrt(100))
+    assert (errs - offset).std() == pytest.approx(0.007, rel=0.05)
+    # another laser of the same model has an offset of its own
+    other, _ = room_lasers("sick_lms500", 5.0, seed=9)
+    assert other._bias_share != noisy._bias_share
 
 
 def test_range_error_follows_the_band_of_the_range():
     # Hokuyo UTM-30LX: +-30 mm and 10 mm sigma up to 10 m, +-50 mm and 30 mm beyond: with walls 14.95 m away every
-    # range lies in 14.95-21.1 m, the far band: sd sqrt(30^2 + (50 / sqrt 3)^2) = 41.6 mm over the beams
+    # range lies in 14.95-21.1 m, the far band: the offset is the laser's share of 50 mm, the sd 30 mm
     noisy, exact = room_lasers("hokuyo_utm30lx", 15.0)
     assert exact.min() > 10.0
     err = noisy.scan(0.0, np.zeros(3)).ranges - exact
-    assert err.std() == pytest.approx(np.hypot(0.030, 0.050 / np.sqrt(3)), rel=0.05)
+    assert err.mean() == pytest.approx(noisy._bias_share * 0.050, abs=4 * 0.030 / np.sqrt(err.size))
+    assert err.std() == pytest.approx(0.030, rel=0.05)
 
 
 def test_presets_fill_the_keys_a_scenario_leaves_out():
