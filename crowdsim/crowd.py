@@ -275,8 +275,7 @@ class Crowd:
     def _remove(self, keep: np.ndarray):
         self.contacts.keep(keep)
         for name in ("id", "pos", "vel", "v0", "kind", "radius", "group", "route", "wp", "goal", "goal_radius",
-                     "walked",
-                     "slow_time", "escape", "squeeze_until", "queued", "visiting", "visit_end", "visited"):
+                     "walked", "slow_time", "escape", "squeeze_until", "queued", "visiting", "visit_end", "visited"):
             setattr(self, name, getattr(self, name)[keep])
 
     @property

@@ -34,7 +34,7 @@ from scipy.stats import norm  # noqa: E402
 from tqdm import tqdm  # noqa: E402
 
 from scenarios import scenario_from_dict  # noqa: E402
-from scenarios.geometry import inside_polygon  # noqa: E402
+from scenarios.geometry import inside_polygon, pair_vectors  # noqa: E402
 
 from .crowd import Crowd  # noqa: E402
 
@@ -133,10 +133,7 @@ class Watch:
                                                        output_type="ndarray")
             if len(near):
                 k, s = near["i"], near["j"]
-                a, ab = self.walls[s, 0], self.walls[s, 1] - self.walls[s, 0]
-                ap = pos[k] - a
-                t = np.clip(np.einsum("ij,ij->i", ap, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-12), 0, 1)
-                clearance = np.linalg.norm(ap - t[:, None] * ab, axis=1) - r[k]
+                clearance = pair_vectors(pos, self.walls, k, s)[1] - r[k]
                 self.min_clearance = min(self.min_clearance, float(clearance.min()))
                 self.inside_wall += len(np.unique(k[clearance < -WALL_TOL]))
         if self.region is not None:

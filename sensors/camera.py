@@ -46,13 +46,14 @@ class Intrinsics:
     def centre(self) -> tuple[float, float]:
         return self.width / 2, self.height / 2
 
-    def pixel_directions(self) -> np.ndarray:
-        """[h, w, 3] optical-frame directions through the pixel centres, z = 1."""
+    def rays(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Optical-frame directions [..., 3] (z = 1) through the centres of pixels (u, v)."""
         cx, cy = self.centre
-        u = (np.arange(self.width) + 0.5 - cx) / self.f
-        v = (np.arange(self.height) + 0.5 - cy) / self.f
-        uu, vv = np.meshgrid(u, v)
-        return np.stack([uu, vv, np.ones_like(uu)], -1)
+        return np.stack([(u + 0.5 - cx) / self.f, (v + 0.5 - cy) / self.f, np.ones(np.shape(u))], -1)
+
+    def pixel_directions(self) -> np.ndarray:
+        """[h, w, 3] optical-frame directions through every pixel's centre, z = 1."""
+        return self.rays(*np.meshgrid(np.arange(self.width), np.arange(self.height)))
 
     def project(self, points: np.ndarray) -> np.ndarray:
         """Pixel coordinates [n, 2] (u, v) of optical-frame points [n, 3] in front of the camera."""
@@ -342,8 +343,7 @@ def silhouettes(scene: Scene, camera: str, intrinsics: Intrinsics, ids: np.ndarr
     the image and holds nothing nearer than it but the person itself."""
     k = intrinsics
     origin, rot = camera_pose(scene, camera)
-    slot_of = {pid: slot for slot, pid in enumerate(scene.slot_person_id[:scene.alive])}
-    slots = np.array([slot_of[pid] for pid in ids], np.int64)
+    slots = scene.slots_of(ids)
     # each person's bounding box (legs may swing out of the torso) projected: the pixels to cast
     reach = body.TORSO_RADIUS + body.LEG_LENGTH * np.sin(body.SWING_AMPLITUDE)
     offsets = np.array([[sx * reach, sy * reach, z] for sx in (-1, 1) for sy in (-1, 1) for z in (0.0, body.HEIGHT)])
@@ -379,8 +379,7 @@ def silhouettes(scene: Scene, camera: str, intrinsics: Intrinsics, ids: np.ndarr
         # of the work: the visible fraction moves by a few percent (0.45 -> 0.49 for a figure 10 pixels wide)
         cast = cast[(u[cast] % 2 == 0) & (v[cast] % 2 == 0)]
         weight[cast] = 4.0
-    d = np.stack([(u[cast] + 0.5 - k.centre[0]) / k.f, (v[cast] + 0.5 - k.centre[1]) / k.f,
-                  np.ones(len(cast))], 1) @ rot.T
+    d = k.rays(u[cast], v[cast]) @ rot.T
     hit[cast] = _hits_persons(scene, slots[owner[cast]], origin, d)
     counts = np.bincount(owner[hit], weights=weight[hit], minlength=len(slots))
     return _boxes_of(owner[hit], u[hit], v[hit], len(slots)), counts

@@ -220,6 +220,12 @@ class Scene:
         if m.ncam:
             mujoco.mj_camlight(m, d)  # camera poses, which mj_kinematics leaves alone
 
+    def slots_of(self, person_ids: np.ndarray) -> np.ndarray:
+        """The slots that hold these persons (each must be alive)."""
+        alive = self.slot_person_id[:self.alive]
+        order = np.argsort(alive)
+        return order[np.searchsorted(alive, np.asarray(person_ids), sorter=order)]
+
     def person_geoms(self, slots: np.ndarray) -> np.ndarray:
         """The geom ids of the persons in ``slots``."""
         return self._all_person_geoms[np.asarray(slots, np.int64)].ravel()
