@@ -1,7 +1,9 @@
 """A rerun recording of a run on a sim-time timeline: walls, ground-truth people, laser points, detections, tracks.
 
 Everything is logged in the world frame (tracks and detections are moved there with the true odom transform) so
-the scene reads as one picture; the robot and its odometry frame are shown as well.
+the scene reads as one picture. The robot shows as its footprint with its frames: base_link, each laser's and depth
+camera's frame (x axes, labelled), and odom; the wall cameras stand where they are, looking along their x axes.
+Camera images go under ``cameras/``, the wall cameras' with each person's visible box.
 """
 
 from __future__ import annotations
@@ -23,12 +25,25 @@ def covariance_ellipses(centres: np.ndarray, covs: np.ndarray, sigma: float = 2.
     return centres[:, None, :] + np.einsum("kij,jn->kni", axes, circle)
 
 
+def _axes(poses: np.ndarray, length: float) -> dict:
+    """Origins and x-axis arrows of 2D poses [n, 3] (x, y, yaw), as rerun's Arrows2D takes them."""
+    return {"origins": poses[:, :2], "vectors": length * np.stack([np.cos(poses[:, 2]), np.sin(poses[:, 2])], 1)}
+
+
 class Recording:
-    def __init__(self, path, walls: np.ndarray, lasers):
+    def __init__(self, path, walls: np.ndarray, sim):
         self.rec = rr.RecordingStream("crowdsim")
         self.rec.save(str(path))
-        self.lasers = lasers
+        self.lasers = sim.lasers
+        self.radius = sim.robot.p["radius"]
+        # the depth cameras' mounts on base_link as 2D poses (x, y, yaw)
+        self.depth_mounts = np.array([[*c.p["position"][:2], c.p["yaw"]] for c in sim.depth_cameras]).reshape(-1, 3)
+        self.sensor_names = [laser.name for laser in sim.lasers] + [c.name for c in sim.depth_cameras]
         self.rec.log("world/walls", rr.LineStrips2D(list(walls), colors=[90, 90, 100]), static=True)
+        if sim.wall_cameras:
+            poses = np.array([[*c.p["position"][:2], c.p["yaw"]] for c in sim.wall_cameras])
+            self.rec.log("world/wall_cameras", rr.Arrows2D(**_axes(poses, 1.0), colors=[0, 160, 160],
+                                                           labels=[c.name for c in sim.wall_cameras]), static=True)
 
     def log(self, frame: Frame) -> None:
         rec = self.rec
@@ -37,9 +52,17 @@ class Recording:
         rec.log("world/people", rr.Points2D(a.position, radii=a.radius, colors=[150, 150, 150],
                                             labels=[str(i) for i in a.id]))
         pose = frame.robot_pose
-        rec.log("world/robot", rr.Points2D(pose[None, :2], radii=0.425, colors=[40, 70, 200]))
-        rec.log("world/robot/heading", rr.Arrows2D(origins=pose[None, :2],
-                                                   vectors=[[0.8 * np.cos(pose[2]), 0.8 * np.sin(pose[2])]]))
+        ring = np.linspace(0, 2 * np.pi, 33)
+        rec.log("world/robot", rr.LineStrips2D([pose[:2] + self.radius * np.stack([np.cos(ring), np.sin(ring)], 1)],
+                                               colors=[40, 70, 200]))
+        rec.log("world/robot/base_link", rr.Arrows2D(
+            origins=[pose[:2]] * 2, vectors=[compose(pose, [0.6, 0, 0])[:2] - pose[:2],
+                                            compose(pose, [0, 0.6, 0])[:2] - pose[:2]],
+            colors=[[255, 0, 0], [0, 255, 0]], labels=["base_link", ""]))
+        mounts = np.array([laser.pose_in(pose) for laser in self.lasers]
+                          + [compose(pose, m) for m in self.depth_mounts]).reshape(-1, 3)
+        rec.log("world/robot/sensors", rr.Arrows2D(**_axes(mounts, 0.3), colors=[200, 100, 0],
+                                                   labels=self.sensor_names))
         points = []
         for laser, scan in zip(self.lasers, frame.scans):
             p = scan.points()

@@ -109,7 +109,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     start = time.perf_counter()
     sim.warm_up()
     warmup_s = time.perf_counter() - start
-    recording = Recording(tmp / "recording.rrd", wall_segments(scenario), sim.lasers) if rrd else None
+    recording = Recording(tmp / "recording.rrd", wall_segments(scenario), sim) if rrd else None
     gt_rows, track_rows, counts, robot_path, odom, crowd = [], [], [], [], [], []
     duration = scenario["duration"]
     bar = tqdm(total=round(duration, 2), unit="sim s", disable=not progress, desc=scenario["name"],

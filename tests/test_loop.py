@@ -145,7 +145,7 @@ def test_camera_runs_are_bit_for_bit_repeatable():
     assert images[0] == images[1]
 
 
-def test_the_recording_holds_the_camera_images_and_boxes(tmp_path):
+def test_the_recording_holds_the_camera_images_boxes_and_the_robots_frames(tmp_path):
     import subprocess
     import sys
     from pathlib import Path
@@ -157,5 +157,6 @@ def test_the_recording_holds_the_camera_images_and_boxes(tmp_path):
     listing = subprocess.run([str(rerun_cli), "rrd", "print", str(tmp_path / "out" / "recording.rrd")],
                              capture_output=True, text=True, check=True).stdout
     for entity in ("/cameras/front_depth/depth", "/cameras/front_depth/people", "/cameras/corner_cam/rgb",
-                   "/cameras/corner_cam/rgb/people", "/world/laser_points", "/world/tracks"):
+                   "/cameras/corner_cam/rgb/people", "/world/laser_points", "/world/tracks", "/world/robot/base_link",
+                   "/world/robot/sensors", "/world/wall_cameras", "/world/odom"):
         assert entity in listing, entity

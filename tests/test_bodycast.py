@@ -1,0 +1,73 @@
+"""Exact ray casts against the body primitives, against hand-worked distances, and the wall camera's people drawn
+over the world: hidden behind a wall, in their clothing colours where they show."""
+
+import numpy as np
+import pytest
+
+from sensors import body, bodycast
+from sensors.camera import GLRenderer, Intrinsics, RaycastRenderer, WallCamera, camera_pose
+from sensors.scene import Scene
+
+F = np.float32
+
+
+def rays(origins, directions):
+    o, d = np.asarray(origins, F).reshape(-1, 3), np.asarray(directions, F).reshape(-1, 3)
+    return (*o.T, *d.T)
+
+
+def test_capsule_side_end_caps_and_a_ray_along_its_axis():
+    # segment (0,0,0)-(0,0,-1), radius 0.1
+    e = np.array([[0.0, 0.0, -1.0]] * 5, F)
+    t = bodycast.ray_capsule(*rays([[1, 0, -0.5], [0, 0, 1], [1, 0, 0.05], [1, 0, -0.5], [1, 0, 0.2]],
+                                   [[-1, 0, 0], [0, 0, -1], [-1, 0, 0], [-2, 0, 0], [-1, 0, 0]]), e, F(0.1))
+    # the side at 0.9; down the axis onto the top cap at 1 - 0.1; the cap at height 0.05, where its section's radius
+    # is sqrt(0.1^2 - 0.05^2); a direction twice as long halves t; above the cap: a miss
+    np.testing.assert_allclose(t[:4], [0.9, 0.9, 1 - np.sqrt(0.0075), 0.45], rtol=1e-5)
+    assert np.isinf(t[4])
+
+
+def test_closed_cylinder_side_top_and_miss():
+    r, z0, z1 = F(0.2), F(0.5), F(1.5)
+    o = np.array([[2, 0, 1], [0.1, 0, 3], [2, 0, 1.6], [2, 0, 1], [0.3, 0, 3]], F)
+    d = np.array([[-1, 0, 0], [0, 0, -1], [-1, 0, 0], [1, 0, 0], [0, 0, -1]], F)
+    t = bodycast.ray_vertical_cylinder(*o.T, *d.T, r, z0, z1)
+    # side at 2 - 0.2; straight down onto the top at 3 - 1.5; above it; pointing away; outside the circle
+    np.testing.assert_allclose(t[:2], [1.8, 1.5], rtol=1e-6)
+    assert np.isinf(t[2:]).all()
+
+
+def test_sphere_with_a_long_direction():
+    t = bodycast.ray_sphere(*rays([[0, 0, 1], [0, 0.2, 1]], [[0, 0, -2], [0, 0, -2]]), F(0.1))
+    np.testing.assert_allclose(t[0], 0.45, rtol=1e-6)
+    assert np.isinf(t[1])
+
+
+CAM = {"name": "wall_cam", "position": [0.0, 0.0, 1.2], "yaw": 0.0, "pitch": 0.0, "fovy_deg": 50.0,
+       "width": 320, "height": 240, "rate": 10.0, "rgb": True}
+
+
+@pytest.mark.parametrize("renderer", ["gl", "raycast"])
+def test_a_wall_camera_shows_people_in_their_colours_and_not_through_walls(renderer, monkeypatch):
+    # a wall across the view at x = 5 from y = 0.8 to 3: person 1 at (6, 2) stands behind it, person 2 at (6, 0)
+    # does not; a level camera at 1.2 m looking +x sees person 2's top face-on at the pixel its torso's front
+    # projects to
+    walls = np.array([[[5.0, 0.8], [5.0, 3.0]], [[-30.0, -30.0], [-30.0, 30.0]]])
+    scene = Scene(walls, 0.425, 2, wall_cameras=[CAM])
+    scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1, 2]), np.array([[6.0, 2.0], [6.0, 0.0]]))
+    if renderer == "raycast":
+        monkeypatch.setenv("MUJOCO_GL", "disable")
+    camera = WallCamera(CAM, scene)
+    assert isinstance(camera.renderer, GLRenderer if renderer == "gl" else RaycastRenderer)
+    frame = camera.capture(0.0)
+    assert list(frame.ids) == [2]
+    assert (frame.person_id == 1).sum() == 0 and (frame.person_id == 2).sum() > 500
+    origin, rot = camera_pose(scene, CAM["name"])
+    u, v = Intrinsics(320, 240, 50.0).project((np.array([[6.0 - body.TORSO_RADIUS, 0.0, 1.0]]) - origin) @ rot)[0]
+    top = body.clothing(np.array([2]))[0][0]
+    pixel = frame.rgb[int(v), int(u)] / 255.0
+    assert frame.person_id[int(v), int(u)] == 2
+    # lit by a light at the eye: the surface faces the camera, so the colour is the top's at full strength (to the
+    # 8-bit step)
+    np.testing.assert_allclose(pixel, top, atol=1.5 / 255)
+    assert frame.visible_fraction[0] == pytest.approx(1.0, abs=0.03)
