@@ -1,4 +1,4 @@
-"""The ``crowdsim`` command: run, scenarios, validate-scenario, bench."""
+"""The ``crowdsim`` command: run, evaluate, scenarios, validate-scenario, validate, scenario-keys, bench."""
 
 from __future__ import annotations
 
@@ -27,6 +27,42 @@ def _cmd_run(args) -> int:
     gt = metrics["groundtruth"]
     print(f"persons within range: {gt['mean_persons_in_range']:.1f} mean, {gt['max_persons_in_range']} max; "
           f"results in {out}/")
+    return 0
+
+
+def _cmd_evaluate(args) -> int:
+    import json
+
+    import numpy as np
+
+    from evaluation.io import EvaluationInputError, load_sequence, write_motchallenge
+    from evaluation.score import score_tracking, tracking_table
+
+    from .run import check_out_dir
+
+    if args.json and Path(args.json).exists():
+        raise EvaluationInputError(f"--json {args.json}: already exists; expected a new file (nothing was written)")
+    if args.motchallenge:
+        check_out_dir(Path(args.motchallenge))
+    if args.threshold <= 0:
+        raise EvaluationInputError(f"--threshold: expected a distance above 0 m, got {args.threshold}")
+    gt = load_sequence(args.gt, occlusion=not args.no_occlusion, visible_column=args.visible_column,
+                       max_range=args.max_range)
+    tracks = load_sequence(args.tracks, occlusion=False)
+    tracking = score_tracking(gt, tracks, args.threshold)
+    print(tracking_table(tracking))
+    ignored = int(gt.ignore.sum())
+    print(f"{tracking['frames']} frames; {ignored} ground-truth rows ignored (occluded or out of range); "
+          f"threshold {args.threshold:g} m")
+    if args.json:
+        Path(args.json).write_text(json.dumps({"tracking": tracking}, indent=2) + "\n")
+    if args.motchallenge:
+        out = Path(args.motchallenge)
+        out.mkdir(parents=True, exist_ok=True)
+        frames = np.concatenate([gt.frame, tracks.frame])
+        first = int(frames.min()) if len(frames) else 0
+        write_motchallenge(out / "gt.txt", gt, groundtruth=True, first_frame=first)
+        write_motchallenge(out / "tracks.txt", tracks, groundtruth=False, first_frame=first)
     return 0
 
 
@@ -101,6 +137,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rrd", action="store_true", help="also write a rerun recording, recording.rrd")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_run)
+    p = sub.add_parser("evaluate", help="score any tracker's output (the CSV layout `crowdsim run` writes) against "
+                                        "ground truth")
+    p.add_argument("--gt", required=True, help="ground truth CSV (header with frame,id,x,y; optional t, visible, "
+                                               "in_range, range, ...)")
+    p.add_argument("--tracks", required=True, help="tracks CSV (header with frame,id,x,y; other columns allowed)")
+    p.add_argument("--threshold", type=float, default=1.0,
+                   help="match distance in metres (default 1, as seed 000; seeds 001 and 003 use 0.3)")
+    p.add_argument("--max-range", type=float, help="ignore ground truth farther than this from the robot (m; "
+                                                  "seed 000's real data: 12) -- needs a range column")
+    p.add_argument("--no-occlusion", action="store_true",
+                   help="count occluded persons as misses (by default a visible column turns ignoring them on)")
+    p.add_argument("--visible-column", default="visible",
+                   help="the ground truth's visibility column: visible (any laser beam hit them, default) or "
+                        "visible_seed000 (seed 000's rule: a laser point within 0.3 m of the position moved 0.2 m "
+                        "towards the laser)")
+    p.add_argument("--json", help="write {\"tracking\": ...} with the keys of metrics.json to this new file")
+    p.add_argument("--motchallenge", help="also export gt.txt and tracks.txt, MOTChallenge-style, into this new or "
+                                          "empty directory")
+    p.set_defaults(func=_cmd_evaluate)
     p = sub.add_parser("scenarios", help="list the bundled scenarios")
     p.set_defaults(func=_cmd_scenarios)
     p = sub.add_parser("validate-scenario", help="check a scenario file and say what it holds")
@@ -125,6 +180,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from evaluation.io import EvaluationInputError
     from scenarios import ScenarioError
 
     from .run import RunDirError
@@ -134,7 +190,7 @@ def main(argv: list[str] | None = None) -> int:
         warnings.showwarning = _show_warning
         try:
             return args.func(args)
-        except (ScenarioError, RunDirError) as e:
+        except (ScenarioError, RunDirError, EvaluationInputError) as e:
             print(f"crowdsim: error: {e}", file=sys.stderr)
             return 2
 

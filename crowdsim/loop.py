@@ -11,14 +11,16 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from evaluation import ClearMot, FrameResult
 from pipeline.fusion import fuse, to_frame
 from pipeline.frames import inverse, transform_points
 from pipeline.laser_detector import SegmentDetector
 from pipeline.tracker import NearestNeighbourTracker, TrackerParams
-from pipeline.types import CameraFrame, DepthFrame, DetectedPersons, LaserScan, TrackedPersons, Visibility
-from scenarios.geometry import line_of_sight, wall_segments
+from pipeline.types import (CameraFrame, DepthFrame, DetectedPersons, GroundTruthTags, LaserScan, TrackedPersons,
+                            Visibility)
+from scenarios.geometry import wall_segments
 from sensors import Laser, Scene, parts_at
 from sensors.body import body_scale
 from sensors.laser import LaserArray
@@ -29,6 +31,10 @@ from .crowd import AgentStates, Crowd
 from .robot import Robot
 
 TRACKING_FRAME = "odom"
+# the ground truth reaches this far beyond the evaluation's range, ignored there (neither missed nor, when a track
+# matches them, a false positive): a track of a person just beyond the limit is no false positive
+GT_MARGIN = 2.0  # m
+SEED000_SHIFT, SEED000_RADIUS = 0.2, 0.3  # m, seed 000 Sec. IV-B's occlusion test
 
 
 @dataclass
@@ -43,7 +49,8 @@ class Frame:
     scans: list[LaserScan]
     detections: DetectedPersons  # fused, odom
     tracks: TrackedPersons  # odom
-    groundtruth: TrackedPersons  # persons within range, odom
+    groundtruth: TrackedPersons  # persons within range and GT_MARGIN beyond, odom
+    gt_tags: GroundTruthTags  # their range, beams and occlusion, for the evaluation
     score: FrameResult
     visibility: Visibility  # who each sensor saw, every person alive
     depth_frames: list[DepthFrame]  # images taken since the previous Frame
@@ -128,10 +135,10 @@ class Simulation:
                 best = min(best, float(pts[ahead, 0].min()) - self.robot.p["radius"])
         return best
 
-    def _groundtruth(self, agents: AgentStates) -> TrackedPersons:
-        """Every person within range whose line of sight from the robot no wall cuts (people may hide people)."""
-        near = np.linalg.norm(agents.position - self.robot.pose[:2], axis=1) <= self.max_range
-        near[near] = line_of_sight(self.robot.pose[:2], agents.position[near], self.walls)
+    def _groundtruth(self, agents: AgentStates) -> tuple[TrackedPersons, np.ndarray]:
+        """Every person within range and a margin beyond (``GT_MARGIN``), and which persons of ``agents`` they
+        are (a mask)."""
+        near = np.linalg.norm(agents.position - self.robot.pose[:2], axis=1) <= self.max_range + GT_MARGIN
         odom_T_world = inverse(self.robot.world_T_odom)
         pos = transform_points(odom_T_world, agents.position[near])
         c, s = np.cos(odom_T_world[2]), np.sin(odom_T_world[2])
@@ -140,7 +147,28 @@ class Simulation:
         zeros = np.zeros((n, 2, 2))
         return TrackedPersons(agents.stamp, TRACKING_FRAME, agents.id[near], np.ones(n, bool), np.zeros(n, bool),
                               np.full(n, -1, np.int64), pos, vel, zeros, zeros.copy(), np.zeros(n),
-                              agents.group_id[near])
+                              agents.group_id[near]), near
+
+    def _tags(self, agents: AgentStates, near: np.ndarray, scans: list[LaserScan],
+              visibility: Visibility) -> GroundTruthTags:
+        """Range, laser beams and occlusion of the ground-truth persons (``near`` of ``agents``)."""
+        xy = agents.position[near]
+        distance = np.linalg.norm(xy - self.robot.pose[:2], axis=1)
+        lasers = [k for k, name in enumerate(visibility.sensors) if name in {scan.frame for scan in scans}]
+        beams = visibility.amount[near][:, lasers].sum(axis=1).astype(np.int64) if lasers else np.zeros(len(xy), int)
+        # seed 000 (Sec. IV-B): a laser point within 0.3 m of the position moved 0.2 m towards that laser
+        seed000 = np.zeros(len(xy), bool)
+        by_name = {laser.name: laser for laser in self.lasers}
+        for scan in scans:
+            pose = by_name[scan.frame].pose_in(self.robot.pose)
+            points = scan.points()
+            points = transform_points(pose, points[np.isfinite(points[:, 0])])
+            if len(points) and len(xy):
+                towards = pose[:2] - xy
+                shifted = xy + SEED000_SHIFT * towards / np.maximum(np.linalg.norm(towards, axis=1), 1e-9)[:, None]
+                nearest, _ = cKDTree(points).query(shifted, distance_upper_bound=SEED000_RADIUS)
+                seed000 |= np.isfinite(nearest)
+        return GroundTruthTags(distance, distance <= self.max_range, beams, beams > 0, seed000)
 
     def step(self) -> Frame | None:
         """Advance one tick; return a Frame when a tracking cycle ran in it."""
@@ -183,11 +211,12 @@ class Simulation:
         tracks = self.tracker.update(stamp, detections)
         self.timing.tracker_s += time.perf_counter() - t3
         self.timing.tracker_cycles += 1
-        gt = self._groundtruth(agents)
-        score = self.clearmot.update(gt.track_id, gt.position, tracks.track_id, tracks.position)
+        gt, near = self._groundtruth(agents)
+        visibility = self._visibility(agents, scans)
+        tags = self._tags(agents, near, scans, visibility)
+        score = self.clearmot.update(gt.track_id, gt.position, tracks.track_id, tracks.position, tags.ignore)
         frame = Frame(self._frame, stamp, self.robot.pose.copy(), self.robot.world_T_odom, agents, scans,
-                      detections, tracks, gt, score, self._visibility(agents, scans), self._pending_depth,
-                      self._pending_camera)
+                      detections, tracks, gt, tags, score, visibility, self._pending_depth, self._pending_camera)
         self._pending_depth, self._pending_camera = [], []
         self._frame += 1
         self.timing.wall_s += time.perf_counter() - t0

@@ -16,14 +16,17 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from evaluation.io import load_sequence
+from evaluation.score import score_tracking, tracking_table
 from scenarios.geometry import wall_segments
 
 from .loop import Simulation
 
 CSV_HEADER = "frame,t,id,x,y,vx,vy"
-# the ground truth adds, per person, the laser beams that hit them this cycle (all lasers) and whether any did:
-# seed 000 ignores correspondences to persons the lasers could not see
-GT_HEADER = CSV_HEADER + ",beams,visible"
+# the ground truth adds, per person, the true distance from the robot, whether within the evaluation's range, the
+# laser beams that hit them this cycle (all lasers), whether any did, and seed 000's own occlusion test: the
+# evaluation ignores persons out of range or physically occluded (evaluation/io.py)
+GT_HEADER = CSV_HEADER + ",range,in_range,beams,visible,visible_seed000"
 CROWD_EVERY = 5  # tracking cycles between the crowd snapshots drawn in the top-down picture
 
 
@@ -44,33 +47,23 @@ def _rows(frame_index: int, stamp: float, persons) -> np.ndarray:
 
 
 def _gt_rows(frame) -> np.ndarray:
-    """Ground-truth rows with their laser beam counts and visibility."""
-    vis = frame.visibility
-    lasers = [k for k, name in enumerate(vis.sensors) if name in {scan.frame for scan in frame.scans}]
-    beams = vis.amount[:, lasers].sum(axis=1) if lasers else np.zeros(len(vis.ids))
-    of_gt = beams[np.searchsorted(vis.ids, frame.groundtruth.track_id)] if len(vis.ids) else np.zeros(0)
-    return np.column_stack([_rows(frame.index, frame.stamp, frame.groundtruth), of_gt, of_gt > 0])
+    """Ground-truth rows with their range and occlusion tags."""
+    tags = frame.gt_tags
+    return np.column_stack([_rows(frame.index, frame.stamp, frame.groundtruth), tags.range, tags.in_range,
+                            tags.beams, tags.visible, tags.visible_seed000])
 
 
 def write_csv(path: Path, rows: list[np.ndarray], header: str = CSV_HEADER) -> None:
     columns = header.count(",") + 1
     data = np.concatenate(rows) if rows else np.zeros((0, columns))
-    fmt = ["%d", "%.2f", "%d", "%.4f", "%.4f", "%.4f", "%.4f", "%d", "%d"][:columns]
+    fmt = ["%d", "%.2f", "%d", "%.4f", "%.4f", "%.4f", "%.4f", "%.3f", "%d", "%d", "%d", "%d"][:columns]
     np.savetxt(path, data, fmt=fmt, delimiter=",", header=header, comments="")
 
 
 def summary_table(metrics: dict) -> str:
-    tr, tm = metrics["tracking"], metrics["timing"]
-
-    def pct(v):
-        return "n/a" if v is None else f"{100 * v:.1f}%"
-
-    motp = "n/a" if tr["motp_m"] is None else f"{tr['motp_m']:.3f} m"
-    head = "| MOTA | MOTP | FP% | miss% | IDS | FP | FN | GT | tracker Hz | real-time factor |"
-    rule = "|" + "---|" * 10
-    row = (f"| {pct(tr['mota'])} | {motp} | {pct(tr['fp_rate'])} | {pct(tr['miss_rate'])} | {tr['id_switches']} "
-           f"| {tr['fp']} | {tr['fn']} | {tr['gt']} | {tm['tracker_hz']:.0f} | {tm['realtime_factor']:.2f}x |")
-    return "\n".join([head, rule, row])
+    tm = metrics["timing"]
+    return tracking_table(metrics["tracking"], {"tracker Hz": f"{tm['tracker_hz']:.0f}",
+                                                "real-time factor": f"{tm['realtime_factor']:.2f}x"})
 
 
 def run(scenario: dict, out: Path, rrd: bool = False, progress: bool = True) -> dict:
@@ -118,7 +111,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     for frame in sim.frames(duration):
         gt_rows.append(_gt_rows(frame))
         track_rows.append(_rows(frame.index, frame.stamp, frame.tracks))
-        counts.append(len(frame.groundtruth))
+        counts.append(int(frame.gt_tags.in_range.sum()))
         robot_path.append(frame.robot_pose)
         odom.append(frame.world_T_odom)
         if frame.index % CROWD_EVERY == 0:  # everyone, in range or not, for the picture
@@ -131,12 +124,16 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     if recording:
         recording.close()
     timing = sim.timing
-    tracking = sim.clearmot.summary()
+    write_csv(tmp / "groundtruth.csv", gt_rows, GT_HEADER)
+    write_csv(tmp / "tracks.csv", track_rows)
+    # scored from the files as written, so that `crowdsim evaluate` on them gives the same figures
+    tracking = score_tracking(load_sequence(tmp / "groundtruth.csv"), load_sequence(tmp / "tracks.csv", False),
+                              scenario["evaluation"]["threshold"])
     metrics = {
         "scenario": scenario["name"],
         "seed": scenario["seed"],
         "duration_s": duration,
-        "frames": tracking["frames"],
+        "frames": len(counts),  # tracking cycles (tracking.frames: those with any ground truth or track)
         "tracking": tracking,
         "groundtruth": {"mean_persons_in_range": float(np.mean(counts)) if counts else 0.0,
                         "max_persons_in_range": int(max(counts)) if counts else 0},
@@ -149,8 +146,6 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
             "warmup_wall_s": warmup_s,
         },
     }
-    write_csv(tmp / "groundtruth.csv", gt_rows, GT_HEADER)
-    write_csv(tmp / "tracks.csv", track_rows)
     (tmp / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
     table = summary_table(metrics)
     (tmp / "summary.md").write_text(

@@ -23,6 +23,25 @@ Per frame t (paper Sec. 2.1):
 
     MOTA = 1 - (FN + FP + IDSW) / GT,   MOTP = sum(match distances) / matches   (metres; lower is better).
 
+Occlusion-aware ground truth (seed 000, Sec. IV-B: "we ignore all correspondences where the groundtruth track is
+physically occluded"): ground-truth objects flagged ``ignore`` take part in the matching like any other, but a
+hypothesis matched to one is not a false positive, the pair is not a match (no MOTP, no ID switch, and it does not
+become the object's last known correspondence), and an ignored object left unmatched is not a miss. The pair is
+still carried into the next frame's step 1, so a track that follows a person through an occlusion keeps them.
+
+Beyond MOTA and MOTP (``summary``):
+
+- rIDS = IDS * GT / TP, the ID switches relative to the recall (seed 000, Sec. IV-B, after Leal-Taixe et al.).
+- MT and ML: ground-truth persons matched in more than 80% / fewer than 20% of the frames they count in
+  (seed 000 after Li et al. 2009); PT the rest. Fragmentations: the times a person's matched run is interrupted
+  and resumed, over the frames they count in.
+- ID switches split as seed 001 (Sec. 4) needs: an *id swap* when the new hypothesis was last matched to another
+  person (it takes that person's identity), a *re-initialisation* otherwise (a new or unused track); seed 001's
+  TSR = TP / GT, MR = FN / GT, GR = FP / GT, and its mismatch is our ID switch count.
+- IDF1, IDP, IDR (Ristani et al. 2016): the one-to-one assignment of ground-truth ids to hypothesis ids over the
+  whole sequence that maximises the frames a pair is within the threshold (IDTP), with IDF1 = 2 IDTP / (GT + H),
+  H the hypotheses that count (those not matched to an ignored person).
+
 Choices: the threshold is inclusive (a distance equal to it is a match) in both steps. Non-finite positions never
 match. Ids must be unique within a frame. With no ground truth at all, MOTA, fp_rate and miss_rate are ``None``
 (undefined, and NaN is not JSON); with no matches MOTP is ``None``.
@@ -36,15 +55,19 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
-__all__ = ["ClearMot", "FrameResult"]
+from .sequence import Sequence, frames_of
+
+__all__ = ["ClearMot", "FrameResult", "evaluate"]
 
 _EMPTY_I = np.zeros(0, np.int64)
 _EMPTY_F = np.zeros(0, np.float64)
+_EMPTY_B = np.zeros(0, bool)
 
 
 @dataclass
 class FrameResult:
-    """Counts of one frame and its matched pairs (ordered as the ground truth was given)."""
+    """Counts of one frame and its matched pairs (ordered as the ground truth was given); ignored persons and the
+    hypotheses matched to them count nowhere."""
 
     gt: int
     matches: int
@@ -81,114 +104,223 @@ def _lookup(keys_sorted: np.ndarray, values: np.ndarray, query: np.ndarray) -> t
     return keys_sorted[p] == query, values[p]
 
 
+def _set(keys_sorted: np.ndarray, values: np.ndarray, key: np.ndarray, value: np.ndarray):
+    """The sorted map with ``key`` set to ``value`` (keys unique)."""
+    known, _ = _lookup(keys_sorted, values, key)
+    if known.any():
+        values = values.copy()
+        values[np.searchsorted(keys_sorted, key[known])] = value[known]
+    if not known.all():
+        k = np.concatenate([keys_sorted, key[~known]])
+        v = np.concatenate([values, value[~known]])
+        o = np.argsort(k)
+        keys_sorted, values = k[o], v[o]
+    return keys_sorted, values
+
+
 class ClearMot:
-    """Accumulates CLEAR-MOT over frames."""
+    """Accumulates CLEAR-MOT and the trajectory and identity measures over frames."""
 
     def __init__(self, threshold: float = 1.0):
-        """``threshold``: largest ground-plane distance (m, inclusive) of a match; 1 m as in seed 000 Sec. IV-B."""
+        """``threshold``: largest ground-plane distance (m, inclusive) of a match; 1 m as in seed 000 Sec. IV-B,
+        0.3 m as in seeds 001 and 003."""
         threshold = float(threshold)
         if not np.isfinite(threshold) or threshold < 0.0:
             raise ValueError("threshold must be finite and >= 0")
         self.threshold = threshold
-        # Matches of the previous frame (step 1), sorted by gt id.
-        self._prev_gt = _EMPTY_I
-        self._prev_hyp = _EMPTY_I
-        # Last known correspondence of every gt id ever matched (step 3), sorted by gt id.
-        self._last_gt = _EMPTY_I
-        self._last_hyp = _EMPTY_I
-        self._frames = self._gt = self._matches = self._fp = self._fn = self._ids = 0
+        # Pairs of the previous frame (step 1), ignored ones included, sorted by gt id.
+        self._prev_gt = self._prev_hyp = _EMPTY_I
+        # Last known correspondence of every gt id ever matched (step 3), and of every hypothesis id the gt id it
+        # was last matched to (to tell id swaps from re-initialisations), each sorted by key.
+        self._last_gt = self._last_hyp = _EMPTY_I
+        self._hyp_key = self._hyp_gt = _EMPTY_I
+        self._frames = self._gt = self._matches = self._fp = self._fn = self._ids = self._swaps = 0
         self._dist_sum = 0.0
+        # per frame, for the trajectory and identity measures at the end
+        self._counted_ids, self._counted_matched, self._counted_frame = [], [], []
+        self._pair_gt, self._pair_hyp = [], []
+        self._hyps = 0
 
-    def update(self, gt_ids: np.ndarray, gt_pos: np.ndarray, hyp_ids: np.ndarray, hyp_pos: np.ndarray) -> FrameResult:
-        """Score one frame: gt ids [n], positions [n, 2]; hypothesis ids [m], positions [m, 2] (metres)."""
+    def update(self, gt_ids: np.ndarray, gt_pos: np.ndarray, hyp_ids: np.ndarray, hyp_pos: np.ndarray,
+               gt_ignore: np.ndarray | None = None) -> FrameResult:
+        """Score one frame: gt ids [n], positions [n, 2], optional ``gt_ignore`` [n] (occluded or out of range);
+        hypothesis ids [m], positions [m, 2] (metres)."""
         gt_ids = _ids(gt_ids, "gt_ids")
         hyp_ids = _ids(hyp_ids, "hyp_ids")
         n, m = gt_ids.size, hyp_ids.size
-        gt_pos = _pos(gt_pos, n, "gt_pos")
-        hyp_pos = _pos(hyp_pos, m, "hyp_pos")
+        ignore = np.zeros(n, bool) if gt_ignore is None else np.asarray(gt_ignore, bool).reshape(-1)
+        if ignore.size != n:
+            raise ValueError(f"gt_ignore must have {n} entries, got {ignore.size}")
+        return self._update(gt_ids, _pos(gt_pos, n, "gt_pos"), ignore, hyp_ids, _pos(hyp_pos, m, "hyp_pos"))
+
+    def _update(self, gt_ids, gt_pos, ignore, hyp_ids, hyp_pos) -> FrameResult:
+        n, m = gt_ids.size, hyp_ids.size
         thr = self.threshold
+        frame = self._frames
+        dist = cdist(gt_pos, hyp_pos) if n and m else np.zeros((n, m))
 
         # Step 1: keep last frame's correspondences that are still present and within the threshold.
         gt_free = np.ones(n, bool)
         hyp_free = np.ones(m, bool)
-        keep_g, keep_h, keep_d = _EMPTY_I, _EMPTY_I, _EMPTY_F
+        keep_g = keep_h = _EMPTY_I
         had, prev_h = _lookup(self._prev_gt, self._prev_hyp, gt_ids)
         if had.any() and m:
             order = np.argsort(hyp_ids)
             present, hj_all = _lookup(hyp_ids[order], order, prev_h)
             cand = np.flatnonzero(had & present)
             hj = hj_all[cand]
-            d = np.sqrt(((gt_pos[cand] - hyp_pos[hj]) ** 2).sum(axis=1))
-            ok = d <= thr
-            keep_g, keep_h, keep_d = cand[ok], hj[ok], d[ok]
+            ok = dist[cand, hj] <= thr
+            keep_g, keep_h = cand[ok], hj[ok]
             gt_free[keep_g] = False
             hyp_free[keep_h] = False
 
         # Step 2: Hungarian matching of the rest; the large finite cost of a forbidden pair exceeds any sum of
         # allowed distances, so the solve maximises the number of allowed pairs first, then minimises distance.
-        new_g, new_h, new_d = _EMPTY_I, _EMPTY_I, _EMPTY_F
+        new_g = new_h = _EMPTY_I
         gi = np.flatnonzero(gt_free)
         hi = np.flatnonzero(hyp_free)
         if gi.size and hi.size:
-            dist = cdist(gt_pos[gi], hyp_pos[hi])
-            allowed = dist <= thr  # False for NaN
-            if allowed.any():
-                big = thr * min(gi.size, hi.size) + 1.0
-                r, c = linear_sum_assignment(np.where(allowed, dist, big))
-                ok = allowed[r, c]
-                new_g, new_h, new_d = gi[r[ok]], hi[c[ok]], dist[r[ok], c[ok]]
+            allowed = dist[gi][:, hi] <= thr  # False for NaN
+            # only the rows and columns with an allowed pair can match
+            ur, uc = np.flatnonzero(allowed.any(axis=1)), np.flatnonzero(allowed.any(axis=0))
+            if ur.size:
+                gi, hi = gi[ur], hi[uc]
+                sub = allowed[ur][:, uc]
+                big = thr * min(ur.size, uc.size) + 1.0
+                r, c = linear_sum_assignment(np.where(sub, dist[gi][:, hi], big))
+                ok = sub[r, c]
+                new_g, new_h = gi[r[ok]], hi[c[ok]]
 
-        # Step 3: a new match contradicting the gt's last known correspondence is an ID switch.
+        # Pairs with ignored persons: carried into the next frame, counted nowhere.
+        pair_g = np.concatenate([keep_g, new_g])
+        pair_h = np.concatenate([keep_h, new_h])
+        o = np.argsort(gt_ids[pair_g])
+        self._prev_gt, self._prev_hyp = gt_ids[pair_g][o], hyp_ids[pair_h][o]
+        counted_new = ~ignore[new_g]
+        new_g, new_h = new_g[counted_new], new_h[counted_new]
+
+        # Step 3: a new match contradicting the gt's last known correspondence is an ID switch; it is an id swap
+        # when the new hypothesis was last matched to another person.
         new_gid, new_hid = gt_ids[new_g], hyp_ids[new_h]
         known, last_h = _lookup(self._last_gt, self._last_hyp, new_gid)
-        switches = int(np.count_nonzero(known & (last_h != new_hid)))
+        switched = known & (last_h != new_hid)
+        switches = int(np.count_nonzero(switched))
+        if switches:
+            had_gt, its_gt = _lookup(self._hyp_key, self._hyp_gt, new_hid[switched])
+            self._swaps += int(np.count_nonzero(had_gt & (its_gt != new_gid[switched])))
         if new_gid.size:
-            self._remember(new_gid, new_hid, known)
+            self._last_gt, self._last_hyp = _set(self._last_gt, self._last_hyp, new_gid, new_hid)
+            self._hyp_key, self._hyp_gt = _set(self._hyp_key, self._hyp_gt, new_hid, new_gid)
 
         # Step 4: counts; matched pairs in ground-truth input order.
-        mg = np.concatenate([keep_g, new_g])
+        counted_keep = ~ignore[keep_g]
+        mg = np.concatenate([keep_g[counted_keep], new_g])
+        mh = np.concatenate([keep_h[counted_keep], new_h])
         order = np.argsort(mg, kind="stable")
-        mg = mg[order]
-        mh = np.concatenate([keep_h, new_h])[order]
-        md = np.concatenate([keep_d, new_d])[order]
-        m_gid, m_hid = gt_ids[mg], hyp_ids[mh]
+        mg, mh = mg[order], mh[order]
+        md = dist[mg, mh]
         k = mg.size
-        o = np.argsort(m_gid)
-        self._prev_gt, self._prev_hyp = m_gid[o], m_hid[o]
-
-        res = FrameResult(n, k, m - k, n - k, switches, m_gid, m_hid, md)
+        hyp_counted = np.ones(m, bool)
+        hyp_counted[pair_h[ignore[pair_g]]] = False  # matched to an ignored person
+        counted = np.flatnonzero(~ignore)
+        n_counted, m_counted = counted.size, int(hyp_counted.sum())
+        res = FrameResult(n_counted, k, m_counted - k, n_counted - k, switches, gt_ids[mg], hyp_ids[mh], md)
         self._frames += 1
-        self._gt += n
+        self._gt += n_counted
         self._matches += k
-        self._fp += m - k
-        self._fn += n - k
+        self._fp += m_counted - k
+        self._fn += n_counted - k
         self._ids += switches
         self._dist_sum += float(md.sum())
+        self._hyps += m_counted
+
+        # For the trajectory measures: every counted person and whether matched; for IDF1: every pair of a counted
+        # person and a counted hypothesis within the threshold.
+        matched = np.zeros(n, bool)
+        matched[mg] = True
+        self._counted_ids.append(gt_ids[counted])
+        self._counted_matched.append(matched[counted])
+        self._counted_frame.append(np.full(n_counted, frame, np.int64))
+        if n_counted and m_counted:
+            r, c = np.nonzero((dist <= thr) & ~ignore[:, None] & hyp_counted)
+            self._pair_gt.append(gt_ids[r])
+            self._pair_hyp.append(hyp_ids[c])
         return res
 
-    def _remember(self, gid: np.ndarray, hid: np.ndarray, known: np.ndarray) -> None:
-        """Set the last known correspondence of ``gid`` to ``hid`` (``known``: gid already in the map)."""
-        if known.any():
-            p = np.searchsorted(self._last_gt, gid[known])
-            self._last_hyp[p] = hid[known]
-        if not known.all():
-            g = np.concatenate([self._last_gt, gid[~known]])
-            h = np.concatenate([self._last_hyp, hid[~known]])
-            o = np.argsort(g)
-            self._last_gt, self._last_hyp = g[o], h[o]
+    def _trajectories(self) -> dict:
+        """MT, PT, ML and fragmentations of the ground-truth persons over the frames they count in."""
+        if not self._counted_ids:
+            return {"mt": 0, "pt": 0, "ml": 0, "fragmentations": 0, "persons": 0}
+        ids = np.concatenate(self._counted_ids)
+        matched = np.concatenate(self._counted_matched)
+        frame = np.concatenate(self._counted_frame)
+        order = np.lexsort((frame, ids))
+        ids, matched = ids[order], matched[order]
+        persons, start, length = np.unique(ids, return_index=True, return_counts=True)
+        ratio = np.add.reduceat(matched.astype(np.int64), start) / length if len(ids) else np.zeros(0)
+        # a matched run starts where a person's matched flag rises (or their first frame is matched)
+        first = np.zeros(len(ids), bool)
+        first[start] = True
+        rise = matched & (first | ~np.roll(matched, 1))
+        runs = np.add.reduceat(rise.astype(np.int64), start) if len(ids) else np.zeros(0, np.int64)
+        return {"mt": int((ratio > 0.8).sum()), "pt": int(((ratio >= 0.2) & (ratio <= 0.8)).sum()),
+                "ml": int((ratio < 0.2).sum()), "fragmentations": int(np.maximum(runs - 1, 0).sum()),
+                "persons": int(len(persons))}
+
+    def _identity(self) -> dict:
+        """IDF1, IDP, IDR: the best one-to-one assignment of gt ids to hypothesis ids over the sequence."""
+        idtp = 0
+        if self._pair_gt:
+            g, h = np.concatenate(self._pair_gt), np.concatenate(self._pair_hyp)
+            gu, gi = np.unique(g, return_inverse=True)
+            hu, hi = np.unique(h, return_inverse=True)
+            counts = np.zeros((gu.size, hu.size))
+            np.add.at(counts, (gi, hi), 1.0)
+            r, c = linear_sum_assignment(counts, maximize=True)
+            idtp = int(counts[r, c].sum())
+        gt, hyps = self._gt, self._hyps
+        return {"idf1": None if gt + hyps == 0 else 2 * idtp / (gt + hyps),
+                "idp": None if hyps == 0 else idtp / hyps, "idr": None if gt == 0 else idtp / gt, "idtp": idtp}
 
     def summary(self) -> dict:
         """Totals over all frames so far as plain, JSON-serialisable Python values (see module docstring)."""
-        gt = self._gt
+        gt, tp = self._gt, self._matches
         return {
             "mota": None if gt == 0 else 1.0 - (self._fp + self._fn + self._ids) / gt,
-            "motp_m": None if self._matches == 0 else self._dist_sum / self._matches,
+            "motp_m": None if tp == 0 else self._dist_sum / tp,
             "fp": self._fp,
             "fn": self._fn,
             "id_switches": self._ids,
+            "id_swaps": self._swaps,
+            "reinitialisations": self._ids - self._swaps,
+            "rids": None if tp == 0 else self._ids * gt / tp,
             "gt": gt,
-            "matches": self._matches,
+            "matches": tp,
             "fp_rate": None if gt == 0 else self._fp / gt,
             "miss_rate": None if gt == 0 else self._fn / gt,
+            "tsr": None if gt == 0 else tp / gt,
+            **self._trajectories(),
+            **self._identity(),
             "frames": self._frames,
+            "threshold_m": self.threshold,
         }
+
+
+def evaluate(gt: Sequence, tracks: Sequence, threshold: float = 1.0) -> dict:
+    """CLEAR-MOT and the trajectory and identity measures of ``tracks`` against ``gt`` over every frame either
+    has rows in (the summary of ``ClearMot``; ``gt.ignore`` marks occluded or out-of-range persons). A frame
+    number missing between two is an empty frame: correspondences are not kept across it."""
+    for name, seq in (("ground truth", gt), ("tracks", tracks)):
+        dup = (np.diff(seq.frame) == 0) & (np.diff(seq.id) == 0) if len(seq) > 1 else _EMPTY_B
+        if dup.any():
+            k = int(np.flatnonzero(dup)[0])
+            raise ValueError(f"{name}: id {seq.id[k]} appears twice in frame {seq.frame[k]}")
+    cm = ClearMot(threshold)
+    frames = frames_of(gt, tracks)
+    gb, tb = gt.bounds(frames), tracks.bounds(frames)
+    for k in range(len(frames)):
+        if k and frames[k] != frames[k - 1] + 1:  # a frame without rows between: nothing was matched in it
+            cm._prev_gt = cm._prev_hyp = _EMPTY_I
+        g, t = slice(gb[k], gb[k + 1]), slice(tb[k], tb[k + 1])
+        cm._update(gt.id[g], gt.position[g], gt.ignore[g], tracks.id[t], tracks.position[t])
+    return cm.summary()

@@ -99,6 +99,25 @@ class Visibility:
 
 
 @dataclass
+class GroundTruthTags:
+    """What the evaluation needs to know of each ground-truth person of a tracking cycle (rows as the ground
+    truth's): the true distance from the robot, whether within the evaluation's range, the laser beams that hit
+    them, whether any did (``visible``: not physically occluded), and seed 000's own occlusion test
+    (``visible_seed000``: a laser point within 0.3 m of the position moved 0.2 m towards that laser)."""
+
+    range: np.ndarray  # [n] m
+    in_range: np.ndarray  # [n] bool
+    beams: np.ndarray  # [n] int
+    visible: np.ndarray  # [n] bool
+    visible_seed000: np.ndarray  # [n] bool
+
+    @property
+    def ignore(self) -> np.ndarray:
+        """Rows that count neither as a miss nor, matched, as a false positive: occluded or out of range."""
+        return ~self.visible | ~self.in_range
+
+
+@dataclass
 class DetectedPersons:
     """Detections of one detector (or one fusion stage) at one instant, in ``frame``."""
 

@@ -8,7 +8,9 @@ import pytest
 
 from evaluation import ClearMot, FrameResult
 
-SUMMARY_KEYS = {"mota", "motp_m", "fp", "fn", "id_switches", "gt", "matches", "fp_rate", "miss_rate", "frames"}
+SUMMARY_KEYS = {"mota", "motp_m", "fp", "fn", "id_switches", "id_swaps", "reinitialisations", "rids", "gt",
+                "matches", "fp_rate", "miss_rate", "tsr", "mt", "pt", "ml", "fragmentations", "persons", "idf1",
+                "idp", "idr", "idtp", "frames", "threshold_m"}
 
 
 def frame(ids, pos):
@@ -186,9 +188,10 @@ def test_summary_is_plain_json():
     s = cm.summary()
     assert set(s) == SUMMARY_KEYS
     assert json.loads(json.dumps(s)) == s
-    for k in ("fp", "fn", "id_switches", "gt", "matches", "frames"):
+    for k in ("fp", "fn", "id_switches", "id_swaps", "reinitialisations", "gt", "matches", "mt", "pt", "ml",
+              "fragmentations", "persons", "idtp", "frames"):
         assert type(s[k]) is int
-    for k in ("mota", "motp_m", "fp_rate", "miss_rate"):
+    for k in ("mota", "motp_m", "fp_rate", "miss_rate", "rids", "tsr", "idf1", "idp", "idr", "threshold_m"):
         assert type(s[k]) is float
     assert s["mota"] == 0.5 and s["motp_m"] == 0.25
 
@@ -231,3 +234,112 @@ def test_single_frame_matching_equals_brute_force():
         k, total = _brute_force(g, h, 1.0)
         assert r.matches == k
         assert float(r.distances.sum()) == pytest.approx(total, abs=1e-9)
+
+
+def test_a_swap_between_two_tracked_people_is_counted_apart_from_a_reinitialisation():
+    cm = ClearMot()
+    a, b = (0.0, 0.0), (3.0, 0.0)
+    step(cm, ([1, 2], [a, b]), ([10, 20], [a, b]))
+    # frame 2: the tracks swap identities: 1 takes track 20 (last matched to person 2) and 2 takes track 10, two
+    # ID switches, both id swaps
+    r = step(cm, ([1, 2], [a, b]), ([10, 20], [b, a]))
+    assert r.id_switches == 2
+    # frame 3: person 1 is lost; frame 4: a new track 30 picks them up: a re-initialisation
+    step(cm, ([1, 2], [a, b]), ([10], [b]))
+    step(cm, ([1, 2], [a, b]), ([10, 30], [b, a]))
+    s = cm.summary()
+    assert (s["id_switches"], s["id_swaps"], s["reinitialisations"]) == (3, 2, 1)
+    # gt 8, tp 7 (frame 3 misses 1), IDS 3 -> rIDS = 3 * 8 / 7; seed 001's TSR = 7 / 8, MR = 1 / 8, GR = 0
+    assert s["rids"] == pytest.approx(24 / 7, abs=1e-12)
+    assert (s["tsr"], s["miss_rate"], s["fp_rate"]) == (7 / 8, 1 / 8, 0.0)
+
+
+def test_an_occluded_person_matched_by_a_track_is_neither_a_false_positive_nor_a_miss():
+    cm = ClearMot()
+    a = (0.0, 0.0)
+    step(cm, ([1], [a]), ([10], [(0.1, 0.0)]))
+    # occluded: the track that follows them is no false positive and the pair no match; unmatched, no miss
+    r = cm.update(*frame([1], [a]), *frame([10], [(0.2, 0.0)]), gt_ignore=np.array([True]))
+    assert (r.gt, r.matches, r.fp, r.fn) == (0, 0, 0, 0)
+    r = cm.update(*frame([1], [a]), *frame([], []), gt_ignore=np.array([True]))
+    assert (r.gt, r.matches, r.fp, r.fn) == (0, 0, 0, 0)
+    # a track far from the occluded person is a false positive all the same
+    r = cm.update(*frame([1], [a]), *frame([11], [(5.0, 0.0)]), gt_ignore=np.array([True]))
+    assert (r.fp, r.fn) == (1, 0)
+    # visible again, picked up by track 11: an ID switch (their last counted correspondence was 10)
+    r = step(cm, ([1], [a]), ([11], [(0.3, 0.0)]))
+    assert (r.matches, r.id_switches) == (1, 1)
+    s = cm.summary()
+    # counted: frames 1 and 5, both matched; MOTP (0.1 + 0.3) / 2; one FP; MOTA 1 - (1 + 0 + 1) / 2
+    assert (s["gt"], s["matches"], s["fp"], s["fn"]) == (2, 2, 1, 0)
+    assert s["motp_m"] == pytest.approx(0.2, abs=1e-12) and s["mota"] == 0.0
+
+
+def test_mostly_tracked_and_mostly_lost_at_their_boundaries():
+    # five persons in 10 frames, matched in 9, 8, 2, 1 and 0 of them: ratios 0.9 (MT: more than 80%), 0.8 (PT),
+    # 0.2 (PT), 0.1 (ML: fewer than 20%), 0 (ML)
+    cm = ClearMot()
+    matched_in = [9, 8, 2, 1, 0]
+    for t in range(10):
+        gt = [(k + 1, (10.0 * k, 0.0)) for k in range(5)]
+        hyp = [(100 + k, (10.0 * k, 0.0)) for k, n in enumerate(matched_in) if t < n]
+        step(cm, ([g[0] for g in gt], [g[1] for g in gt]), ([h[0] for h in hyp], [h[1] for h in hyp]))
+    s = cm.summary()
+    assert (s["mt"], s["pt"], s["ml"], s["persons"]) == (1, 2, 2, 5)
+
+
+def test_fragmentations_count_interrupted_and_resumed_runs():
+    # matched in frames 0-1, lost in 2, matched in 3, lost in 4-5, matched in 6: three runs, two fragmentations;
+    # an occluded frame (7) between matched frames 6 and 8 does not interrupt
+    cm = ClearMot()
+    seen = [1, 1, 0, 1, 0, 0, 1, None, 1]
+    for flag in seen:
+        hyp = ([10], [(0.0, 0.0)]) if flag else ([], [])
+        cm.update(*frame([1], [(0.0, 0.0)]), *frame(*hyp), gt_ignore=np.array([flag is None]))
+    assert cm.summary()["fragmentations"] == 2
+
+
+def test_idf1_assigns_identities_over_the_whole_sequence():
+    # person 1 for 4 frames: tracks 10 (frames 0-2) then 20 (frame 3); person 2 for 2 frames: track 20 (frames
+    # 0-1). IDTP pairs: (1,10) 3 frames, (1,20) 1, (2,20) 2. Best one-to-one: (1,10) + (2,20) = 5.
+    # GT 6, H 6 -> IDF1 = 2 * 5 / 12, IDP = IDR = 5 / 6
+    cm = ClearMot()
+    a, b = (0.0, 0.0), (5.0, 0.0)
+    step(cm, ([1, 2], [a, b]), ([10, 20], [a, b]))
+    step(cm, ([1, 2], [a, b]), ([10, 20], [a, b]))
+    step(cm, ([1], [a]), ([10], [a]))
+    step(cm, ([1], [a]), ([20], [a]))
+    s = cm.summary()
+    assert s["idtp"] == 5
+    assert s["idf1"] == pytest.approx(10 / 12, abs=1e-12)
+    assert s["idp"] == pytest.approx(5 / 6, abs=1e-12) and s["idr"] == pytest.approx(5 / 6, abs=1e-12)
+
+
+def test_evaluate_on_sequences_equals_stepping_frame_by_frame_and_breaks_correspondences_at_empty_frames():
+    from evaluation import Sequence, evaluate
+
+    rng = np.random.default_rng(3)
+    gt_rows, hyp_rows = [], []
+    cm = ClearMot(0.5)
+    for t in range(40):
+        ids = rng.choice(8, size=rng.integers(0, 6), replace=False)
+        pos = rng.uniform(0, 3, (len(ids), 2))
+        hids = rng.choice(12, size=rng.integers(0, 6), replace=False)
+        hpos = rng.uniform(0, 3, (len(hids), 2))
+        ign = rng.random(len(ids)) < 0.2
+        cm.update(ids, pos, hids, hpos, gt_ignore=ign)
+        gt_rows += [(t, i, *p, g) for i, p, g in zip(ids, pos, ign)]
+        hyp_rows += [(t, i, *p) for i, p in zip(hids, hpos)]
+    g, h = np.array(gt_rows), np.array(hyp_rows)
+    got = evaluate(Sequence.from_rows(g[:, 0], g[:, 1], g[:, 2:4], ignore=g[:, 4] > 0),
+                   Sequence.from_rows(h[:, 0], h[:, 1], h[:, 2:4]), 0.5)
+    expect = cm.summary()
+    expect["frames"] = len(np.unique(np.concatenate([g[:, 0], h[:, 0]])))  # frames with any row
+    assert got == expect
+    # person 1 matched by track 10 in frames 0 and 2 with frame 1 empty: the correspondence is not kept across the
+    # gap, but re-made by the Hungarian step; with track 11 nearer in frame 2 the gt takes 11: an ID switch
+    seq = lambda rows: Sequence.from_rows(*np.array(rows, float).T[:2], np.array(rows, float)[:, 2:])  # noqa: E731
+    s = evaluate(seq([(0, 1, 0, 0), (2, 1, 0, 0)]), seq([(0, 10, 0.5, 0), (2, 10, 0.5, 0), (2, 11, 0.1, 0)]))
+    assert (s["id_switches"], s["fp"]) == (1, 1)
+    s = evaluate(seq([(0, 1, 0, 0), (1, 1, 0, 0)]), seq([(0, 10, 0.5, 0), (1, 10, 0.5, 0), (1, 11, 0.1, 0)]))
+    assert (s["id_switches"], s["fp"]) == (0, 1)  # consecutive frames: kept although 11 is nearer

@@ -178,13 +178,15 @@ def test_short_run_writes_a_complete_run_directory(tmp_path, capsys):
         lines = (out / name).read_text().splitlines()
         assert lines[0] == header
         assert all(len(row.split(",")) == header.count(",") + 1 for row in lines[1:])
-    assert GT_HEADER == "frame,t,id,x,y,vx,vy,beams,visible" and CSV_HEADER == "frame,t,id,x,y,vx,vy"
-    gt_rows = (out / "groundtruth.csv").read_text().splitlines()[1:]
-    # visible is 1 exactly where at least one beam hit the person
-    assert all((int(r.split(",")[7]) > 0) == (r.split(",")[8] == "1") for r in gt_rows)
-    assert len({row.split(",")[0] for row in gt_rows}) == metrics["frames"]
-    assert len(gt_rows) == metrics["tracking"]["gt"]
-    stamps = [float(row.split(",")[1]) for row in gt_rows]
+    assert GT_HEADER == ("frame,t,id,x,y,vx,vy,range,in_range,beams,visible,visible_seed000")
+    assert CSV_HEADER == "frame,t,id,x,y,vx,vy"
+    gt_rows = [[float(v) for v in r.split(",")] for r in (out / "groundtruth.csv").read_text().splitlines()[1:]]
+    # visible is 1 exactly where at least one beam hit the person; in_range where within the 20 m range
+    assert all((r[9] > 0) == (r[10] == 1) and (r[7] <= 20.0) == (r[8] == 1) for r in gt_rows)
+    assert len({r[0] for r in gt_rows}) == metrics["frames"]
+    # the rows that count: in range and visible
+    assert sum(r[8] == 1 and r[10] == 1 for r in gt_rows) == metrics["tracking"]["gt"]
+    stamps = [r[1] for r in gt_rows]
     assert 2.0 < min(stamps) and max(stamps) <= 4.0 + 1e-6  # recorded after the 2 s warm-up only
 
     assert (out / "summary.md").read_text().startswith("# tiny_room")
