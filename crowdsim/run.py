@@ -14,9 +14,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+import yaml
 from tqdm import tqdm
 
 from evaluation.io import load_sequence
+from pipeline.frames import compose, inverse
 from evaluation.score import score_tracking, tracking_table
 from scenarios.geometry import wall_segments
 
@@ -27,6 +29,9 @@ CSV_HEADER = "frame,t,id,x,y,vx,vy"
 # laser beams that hit them this cycle (all lasers), whether any did, and seed 000's own occlusion test: the
 # evaluation ignores persons out of range or physically occluded (evaluation/io.py)
 GT_HEADER = CSV_HEADER + ",range,in_range,beams,visible,visible_seed000"
+DETECTIONS_HEADER = "frame,t,id,x,y,confidence"  # the fused detections the tracker was given, odom
+# the robot's true pose in the world and its odometry pose in odom (what the pipeline saw), per tracking cycle
+ROBOT_HEADER = "frame,t,x,y,yaw,odom_x,odom_y,odom_yaw"
 CROWD_EVERY = 5  # tracking cycles between the crowd snapshots drawn in the top-down picture
 
 
@@ -46,6 +51,29 @@ def _rows(frame_index: int, stamp: float, persons) -> np.ndarray:
                             persons.velocity])
 
 
+INTEGER_COLUMNS = {"id", "in_range", "beams", "visible", "visible_seed000"}
+
+
+def _without_unset(value):
+    """The data without the optional keys left unset (None), which a scenario file leaves out."""
+    if isinstance(value, dict):
+        return {k: _without_unset(v) for k, v in value.items() if v is not None}
+    if isinstance(value, list):
+        return [_without_unset(v) for v in value]
+    return value
+
+
+def _detection_rows(frame) -> np.ndarray:
+    d = frame.detections
+    return np.column_stack([np.full(len(d), frame.index), np.full(len(d), frame.stamp), d.detection_id,
+                            d.position[:, :2], d.confidence])
+
+
+def _robot_row(frame) -> np.ndarray:
+    odom_pose = compose(inverse(frame.world_T_odom), frame.robot_pose)
+    return np.array([[frame.index, frame.stamp, *frame.robot_pose, *odom_pose]])
+
+
 def _gt_rows(frame) -> np.ndarray:
     """Ground-truth rows with their range and occlusion tags."""
     tags = frame.gt_tags
@@ -56,7 +84,7 @@ def _gt_rows(frame) -> np.ndarray:
 def write_csv(path: Path, rows: list[np.ndarray], header: str = CSV_HEADER) -> None:
     columns = header.count(",") + 1
     data = np.concatenate(rows) if rows else np.zeros((0, columns))
-    fmt = ["%d", "%.2f", "%d", "%.4f", "%.4f", "%.4f", "%.4f", "%.3f", "%d", "%d", "%d", "%d"][:columns]
+    fmt = ["%d", "%.2f"] + ["%d" if name in INTEGER_COLUMNS else "%.4f" for name in header.split(",")[2:]]
     np.savetxt(path, data, fmt=fmt, delimiter=",", header=header, comments="")
 
 
@@ -103,7 +131,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     sim.warm_up()
     warmup_s = time.perf_counter() - start
     recording = Recording(tmp / "recording.rrd", wall_segments(scenario), sim) if rrd else None
-    gt_rows, track_rows, counts, robot_path, odom, crowd = [], [], [], [], [], []
+    gt_rows, track_rows, detection_rows, robot_rows, counts, robot_path, odom, crowd = [], [], [], [], [], [], [], []
     duration = scenario["duration"]
     bar = tqdm(total=round(duration, 2), unit="sim s", disable=not progress, desc=scenario["name"],
                bar_format="{l_bar}{bar}| {n:.1f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
@@ -111,6 +139,8 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     for frame in sim.frames(duration):
         gt_rows.append(_gt_rows(frame))
         track_rows.append(_rows(frame.index, frame.stamp, frame.tracks))
+        detection_rows.append(_detection_rows(frame))
+        robot_rows.append(_robot_row(frame))
         counts.append(int(frame.gt_tags.in_range.sum()))
         robot_path.append(frame.robot_pose)
         odom.append(frame.world_T_odom)
@@ -126,6 +156,12 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     timing = sim.timing
     write_csv(tmp / "groundtruth.csv", gt_rows, GT_HEADER)
     write_csv(tmp / "tracks.csv", track_rows)
+    write_csv(tmp / "detections.csv", detection_rows, DETECTIONS_HEADER)
+    write_csv(tmp / "robot.csv", robot_rows, ROBOT_HEADER)
+    # the scenario as run, every default filled in: a scenario file that runs again as it is
+    resolved = _without_unset({key: value for key, value in scenario.items() if key != "source"})
+    (tmp / "scenario.yaml").write_text(f"# resolved from {scenario['source']}\n"
+                                       + yaml.safe_dump(resolved, sort_keys=False))
     # scored from the files as written, so that `crowdsim evaluate` on them gives the same figures
     tracking = score_tracking(load_sequence(tmp / "groundtruth.csv"), load_sequence(tmp / "tracks.csv", False),
                               scenario["evaluation"]["threshold"])

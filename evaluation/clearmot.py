@@ -77,6 +77,8 @@ class FrameResult:
     matched_gt_ids: np.ndarray  # [k] int64
     matched_hyp_ids: np.ndarray  # [k] int64
     distances: np.ndarray  # [k] metres
+    switched_gt_ids: np.ndarray  # the persons whose match this frame is an ID switch
+    excused_hyp_ids: np.ndarray  # hypotheses matched to ignored persons: no false positives
 
 
 def _ids(a, name: str) -> np.ndarray:
@@ -224,7 +226,8 @@ class ClearMot:
         hyp_counted[pair_h[ignore[pair_g]]] = False  # matched to an ignored person
         counted = np.flatnonzero(~ignore)
         n_counted, m_counted = counted.size, int(hyp_counted.sum())
-        res = FrameResult(n_counted, k, m_counted - k, n_counted - k, switches, gt_ids[mg], hyp_ids[mh], md)
+        res = FrameResult(n_counted, k, m_counted - k, n_counted - k, switches, gt_ids[mg], hyp_ids[mh], md,
+                          new_gid[switched], hyp_ids[~hyp_counted])
         self._frames += 1
         self._gt += n_counted
         self._matches += k
@@ -310,17 +313,23 @@ def evaluate(gt: Sequence, tracks: Sequence, threshold: float = 1.0) -> dict:
     """CLEAR-MOT and the trajectory and identity measures of ``tracks`` against ``gt`` over every frame either
     has rows in (the summary of ``ClearMot``; ``gt.ignore`` marks occluded or out-of-range persons). A frame
     number missing between two is an empty frame: correspondences are not kept across it."""
+    cm = ClearMot(threshold)
+    for _ in score_frames(gt, tracks, cm):
+        pass
+    return cm.summary()
+
+
+def score_frames(gt: Sequence, tracks: Sequence, cm: ClearMot):
+    """Feed ``cm`` frame by frame; yield each frame number with its FrameResult."""
     for name, seq in (("ground truth", gt), ("tracks", tracks)):
         dup = (np.diff(seq.frame) == 0) & (np.diff(seq.id) == 0) if len(seq) > 1 else _EMPTY_B
         if dup.any():
             k = int(np.flatnonzero(dup)[0])
             raise ValueError(f"{name}: id {seq.id[k]} appears twice in frame {seq.frame[k]}")
-    cm = ClearMot(threshold)
     frames = frames_of(gt, tracks)
     gb, tb = gt.bounds(frames), tracks.bounds(frames)
     for k in range(len(frames)):
         if k and frames[k] != frames[k - 1] + 1:  # a frame without rows between: nothing was matched in it
             cm._prev_gt = cm._prev_hyp = _EMPTY_I
         g, t = slice(gb[k], gb[k + 1]), slice(tb[k], tb[k + 1])
-        cm._update(gt.id[g], gt.position[g], gt.ignore[g], tracks.id[t], tracks.position[t])
-    return cm.summary()
+        yield int(frames[k]), cm._update(gt.id[g], gt.position[g], gt.ignore[g], tracks.id[t], tracks.position[t])

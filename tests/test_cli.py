@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from crowdsim.cli import main
@@ -160,7 +161,18 @@ def test_short_run_writes_a_complete_run_directory(tmp_path, capsys):
     assert main(["run", str(scenario), "--out", str(out), "--quiet"]) == 0
     captured = capsys.readouterr()
     assert listing(tmp_path) == {"tiny.yaml", "out"}  # the temporary directory was moved, not left behind
-    assert {"metrics.json", "groundtruth.csv", "tracks.csv", "summary.md", "topdown.png"} <= listing(out)
+    assert {"metrics.json", "groundtruth.csv", "tracks.csv", "detections.csv", "robot.csv", "scenario.yaml",
+            "summary.md", "topdown.png"} <= listing(out)
+    # the resolved scenario is a scenario file that loads to the same scenario
+    again, first = load_scenario(str(out / "scenario.yaml")), load_scenario(str(scenario))
+    assert again.pop("source") != first.pop("source") and again == first
+    robot = np.loadtxt(out / "robot.csv", delimiter=",", skiprows=1)
+    assert (out / "robot.csv").read_text().startswith("frame,t,x,y,yaw,odom_x,odom_y,odom_yaw\n")
+    # perfect odometry: the odometry pose is the true pose relative to the start, (6, 2) facing +y
+    np.testing.assert_allclose(robot[:, 5], robot[:, 3] - 2.0, atol=2e-4)
+    np.testing.assert_allclose(robot[:, 6], -(robot[:, 2] - 6.0), atol=2e-4)
+    detections = np.loadtxt(out / "detections.csv", delimiter=",", skiprows=1)
+    assert detections.shape[1] == 6 and len(detections) > 0 and set(detections[:, 0]) <= set(robot[:, 0])
     assert "recording.rrd" not in listing(out)
     umask = os.umask(0)
     os.umask(umask)
