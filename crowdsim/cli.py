@@ -66,6 +66,28 @@ def _cmd_evaluate(args) -> int:
     return 0
 
 
+def _cmd_report(args) -> int:
+    from evaluation.io import EvaluationInputError
+    from evaluation.report import write_report
+    from evaluation.score import pct
+    from scenarios import load_scenario
+    from scenarios.geometry import wall_segments
+
+    from .run import write_directory
+
+    run_dir = Path(args.run_dir)
+    for name in ("scenario.yaml", "groundtruth.csv", "tracks.csv"):
+        if not (run_dir / name).is_file():
+            raise EvaluationInputError(f"{run_dir}: no {name}; expected a run directory that `crowdsim run` wrote")
+    scenario = load_scenario(str(run_dir / "scenario.yaml"))
+    out = Path(args.out) if args.out else run_dir / "report"
+    title = f"{scenario['name']}, seed {scenario['seed']}"
+    tracking = write_directory(out, lambda tmp: write_report(tmp, run_dir, wall_segments(scenario),
+                                                             scenario["evaluation"]["threshold"], title))
+    print(f"MOTA {pct(tracking['mota'])}, IDF1 {pct(tracking['idf1'])}; report: {out / 'report.md'}")
+    return 0
+
+
 def _cmd_scenarios(args) -> int:
     from scenarios import bundled_scenarios
 
@@ -160,6 +182,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--motchallenge", help="also export gt.txt and tracks.txt, MOTChallenge-style, into this new or "
                                           "empty directory")
     p.set_defaults(func=_cmd_evaluate)
+    p = sub.add_parser("report", help="report.md with the metric tables and figures of a run directory")
+    p.add_argument("run_dir", help="a directory `crowdsim run` wrote")
+    p.add_argument("--out", help="where to write it (default RUN_DIR/report); must be new or empty")
+    p.set_defaults(func=_cmd_report)
     p = sub.add_parser("scenarios", help="list the bundled scenarios")
     p.set_defaults(func=_cmd_scenarios)
     p = sub.add_parser("validate-scenario", help="check a scenario file and say what it holds")

@@ -94,19 +94,21 @@ def summary_table(metrics: dict) -> str:
                                                 "real-time factor": f"{tm['realtime_factor']:.2f}x"})
 
 
-def run(scenario: dict, out: Path, rrd: bool = False, progress: bool = True) -> dict:
-    """Simulate, score and write ``out``; return metrics.json's content."""
+def write_directory(out: Path, write):
+    """Call ``write(tmp)`` to fill a fresh temporary directory beside ``out`` and move it into place only when
+    complete: a failure leaves nothing half-written, and an existing non-empty ``out`` is never touched.
+    Returns what ``write`` returns."""
     out = Path(out)
     check_out_dir(out)
-    made = [p for p in reversed(out.absolute().parents) if not p.exists()]  # parents this run creates
+    made = [p for p in reversed(out.absolute().parents) if not p.exists()]  # parents this creates
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = None
     try:
         tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
         umask = os.umask(0)
         os.umask(umask)
-        tmp.chmod(0o777 & ~umask)  # mkdtemp makes it private; the finished run directory is an ordinary one
-        metrics = _simulate(scenario, tmp, rrd, progress)
+        tmp.chmod(0o777 & ~umask)  # mkdtemp makes it private; the finished directory is an ordinary one
+        result = write(tmp)
         if out.exists():
             out.rmdir()  # checked empty above
         tmp.rename(out)
@@ -119,7 +121,12 @@ def run(scenario: dict, out: Path, rrd: bool = False, progress: bool = True) -> 
             except OSError:
                 break
         raise
-    return metrics
+    return result
+
+
+def run(scenario: dict, out: Path, rrd: bool = False, progress: bool = True) -> dict:
+    """Simulate, score and write ``out``; return metrics.json's content."""
+    return write_directory(out, lambda tmp: _simulate(scenario, tmp, rrd, progress))
 
 
 def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:

@@ -22,7 +22,7 @@ class EvaluationInputError(ValueError):
     pass
 
 
-def read_table(path) -> dict[str, np.ndarray]:
+def read_table(path, required: tuple[str, ...] = REQUIRED) -> dict[str, np.ndarray]:
     """The columns of a CSV with a header row, as float arrays by name."""
     path = Path(path)
     try:
@@ -32,10 +32,10 @@ def read_table(path) -> dict[str, np.ndarray]:
             rows = [line for line in f if line.strip()]
     except OSError as e:
         raise EvaluationInputError(f"{path}: cannot be read ({e.strerror})") from None
-    missing = [c for c in REQUIRED if c not in names]
+    missing = [c for c in required if c not in names]
     if missing:
         raise EvaluationInputError(f"{path}: header {header!r} lacks column(s) {', '.join(missing)}; expected a "
-                                   f"header row with at least {', '.join(REQUIRED)}")
+                                   f"header row with at least {', '.join(required)}")
     try:
         data = np.loadtxt(rows, delimiter=",", ndmin=2) if rows else np.zeros((0, len(names)))
     except ValueError as e:

@@ -12,7 +12,8 @@ def score_tracking(gt: Sequence, tracks: Sequence, threshold: float = 1.0) -> di
     return evaluate(gt, tracks, threshold)
 
 
-def _pct(v) -> str:
+def pct(v) -> str:
+    """A share as a percentage with one decimal, n/a when undefined."""
     return "n/a" if v is None else f"{100 * v:.1f}%"
 
 
@@ -21,9 +22,9 @@ def tracking_table(tracking: dict, extra: dict[str, str] | None = None) -> str:
     ML), IDF1, the counts, and any ``extra`` columns."""
     motp = "n/a" if tracking["motp_m"] is None else f"{tracking['motp_m']:.3f} m"
     rids = "n/a" if tracking["rids"] is None else f"{tracking['rids']:.0f}"
-    cells = {"MOTA": _pct(tracking["mota"]), "MOTP": motp, "FP%": _pct(tracking["fp_rate"]),
-             "miss%": _pct(tracking["miss_rate"]), "IDS": str(tracking["id_switches"]), "rIDS": rids,
-             "MT": str(tracking["mt"]), "ML": str(tracking["ml"]), "IDF1": _pct(tracking["idf1"]),
+    cells = {"MOTA": pct(tracking["mota"]), "MOTP": motp, "FP%": pct(tracking["fp_rate"]),
+             "miss%": pct(tracking["miss_rate"]), "IDS": str(tracking["id_switches"]), "rIDS": rids,
+             "MT": str(tracking["mt"]), "ML": str(tracking["ml"]), "IDF1": pct(tracking["idf1"]),
              "FP": str(tracking["fp"]), "FN": str(tracking["fn"]), "GT": str(tracking["gt"]), **(extra or {})}
     return "\n".join(["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells),
                       "| " + " | ".join(cells.values()) + " |"])
