@@ -36,7 +36,8 @@ def _cmd_evaluate(args) -> int:
     import numpy as np
 
     from evaluation.io import EvaluationInputError, load_sequence, write_motchallenge
-    from evaluation.score import score_tracking, tracking_table
+    from evaluation.score import (SEED000_COLUMNS, SEED001_COLUMNS, mean_sd, score_tracking, seeds_table,
+                                  tracking_table)
 
     from .run import check_out_dir
 
@@ -46,9 +47,27 @@ def _cmd_evaluate(args) -> int:
         check_out_dir(Path(args.motchallenge))
     if args.threshold <= 0:
         raise EvaluationInputError(f"--threshold: expected a distance above 0 m, got {args.threshold}")
-    gt = load_sequence(args.gt, occlusion=not args.no_occlusion, visible_column=args.visible_column,
-                       max_range=args.max_range)
-    tracks = load_sequence(args.tracks, occlusion=False)
+    if bool(args.runs) == bool(args.gt or args.tracks) or (not args.runs and not (args.gt and args.tracks)):
+        raise EvaluationInputError("expected either --gt GT.csv and --tracks TRACKS.csv, or --runs DIR [DIR ...]")
+
+    def load(gt_path, tracks_path):
+        return (load_sequence(gt_path, occlusion=not args.no_occlusion, visible_column=args.visible_column,
+                              max_range=args.max_range), load_sequence(tracks_path, occlusion=False))
+
+    if args.runs:
+        if args.motchallenge:
+            raise EvaluationInputError("--motchallenge exports one pair of files: give --gt and --tracks")
+        runs = [score_tracking(*load(Path(d) / "groundtruth.csv", Path(d) / "tracks.csv"), args.threshold)
+                for d in args.runs]
+        print(f"{len(runs)} runs at {args.threshold:g} m, mean and sample standard deviation")
+        print(seeds_table(runs, SEED000_COLUMNS))
+        print()
+        print(seeds_table(runs, SEED001_COLUMNS))
+        mean, sd = mean_sd(runs)
+        if args.json:
+            Path(args.json).write_text(json.dumps({"runs": runs, "mean": mean, "sd": sd}, indent=2) + "\n")
+        return 0
+    gt, tracks = load(args.gt, args.tracks)
     tracking = score_tracking(gt, tracks, args.threshold)
     print(tracking_table(tracking))
     ignored = int(gt.ignore.sum())
@@ -165,9 +184,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_run)
     p = sub.add_parser("evaluate", help="score any tracker's output (the CSV layout `crowdsim run` writes) against "
                                         "ground truth")
-    p.add_argument("--gt", required=True, help="ground truth CSV (header with frame,id,x,y; optional t, visible, "
-                                               "in_range, range, ...)")
-    p.add_argument("--tracks", required=True, help="tracks CSV (header with frame,id,x,y; other columns allowed)")
+    p.add_argument("--gt", help="ground truth CSV (header with frame,id,x,y; optional t, visible, in_range, range, "
+                                "...)")
+    p.add_argument("--tracks", help="tracks CSV (header with frame,id,x,y; other columns allowed)")
+    p.add_argument("--runs", nargs="+", metavar="DIR",
+                   help="instead of --gt and --tracks: run directories (the same scenario at several seeds, say), "
+                        "scored each and summed up as mean and standard deviation, as seed 001's tables")
     p.add_argument("--threshold", type=float, default=1.0,
                    help="match distance in metres (default 1, as seed 000; seeds 001 and 003 use 0.3)")
     p.add_argument("--max-range", type=float, help="ignore ground truth farther than this from the robot (m; "
@@ -178,7 +200,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the ground truth's visibility column: visible (any laser beam hit them, default) or "
                         "visible_seed000 (seed 000's rule: a laser point within 0.3 m of the position moved 0.2 m "
                         "towards the laser)")
-    p.add_argument("--json", help="write {\"tracking\": ...} with the keys of metrics.json to this new file")
+    p.add_argument("--json", help="write {\"tracking\": ...} with the keys of metrics.json to this new file (with "
+                                  "--runs: {\"runs\": [...], \"mean\": ..., \"sd\": ...})")
     p.add_argument("--motchallenge", help="also export gt.txt and tracks.txt, MOTChallenge-style, into this new or "
                                           "empty directory")
     p.set_defaults(func=_cmd_evaluate)

@@ -20,7 +20,7 @@ import numpy as np  # noqa: E402
 
 from .clearmot import ClearMot, evaluate, score_frames  # noqa: E402
 from .io import load_sequence, read_table  # noqa: E402
-from .score import pct, score_tracking, tracking_table  # noqa: E402
+from .score import SEED001_COLUMNS, pct, score_tracking, seeds_table, tracking_table  # noqa: E402
 from .sequence import Sequence  # noqa: E402
 
 ROBOT_COLUMNS = ("frame", "t", "x", "y", "yaw", "odom_x", "odom_y", "odom_yaw")
@@ -136,19 +136,6 @@ def _over_time(path, events) -> None:
     plt.close(fig)
 
 
-def _seed001_table(s: dict) -> str:
-    def num(v, fmt):
-        return "n/a" if v is None else format(v, fmt)
-
-    cells = {"TSR": num(s["tsr"], ".3f"), "MR": num(s["miss_rate"], ".3f"), "GR": num(s["fp_rate"], ".3f"),
-             "mismatch": str(s["id_switches"]), "id swaps": str(s["id_swaps"]),
-             "re-initialisations": str(s["reinitialisations"]),
-             "MOTP [cm]": num(None if s["motp_m"] is None else 100 * s["motp_m"], ".2f"),
-             "MOTA": num(s["mota"], ".3f")}
-    return "\n".join(["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells),
-                      "| " + " | ".join(cells.values()) + " |"])
-
-
 def write_report(out: Path, run_dir: Path, walls: np.ndarray, threshold: float, title: str) -> dict:
     """Write report.md and its figures into ``out`` from the run in ``run_dir``; return the tracking figures."""
     out, run_dir = Path(out), Path(run_dir)
@@ -174,7 +161,7 @@ def write_report(out: Path, run_dir: Path, walls: np.ndarray, threshold: float, 
         f"| {tracking['mt']} | {tracking['pt']} | {tracking['ml']} | {tracking['persons']} | "
         f"{tracking['fragmentations']} | {pct(tracking['idf1'])} | {pct(tracking['idp'])} | "
         f"{pct(tracking['idr'])} | {tracking['id_swaps']} | {tracking['reinitialisations']} |", "",
-        f"## Seed 001's set at {SEED001_THRESHOLD:g} m", "", _seed001_table(seed001), "",
+        f"## Seed 001's set at {SEED001_THRESHOLD:g} m", "", seeds_table([seed001], SEED001_COLUMNS), "",
         "## What happened", "",
         "![top-down view: ground truth thin grey, tracks coloured by id, ID switches as crosses at the person, "
         "false positives as red dots](topdown_tracking.png)", "",

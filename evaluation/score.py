@@ -3,6 +3,8 @@ run and anyone's through ``crowdsim evaluate``, so the two agree exactly."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from .clearmot import evaluate
 from .sequence import Sequence
 
@@ -28,3 +30,42 @@ def tracking_table(tracking: dict, extra: dict[str, str] | None = None) -> str:
              "FP": str(tracking["fp"]), "FN": str(tracking["fn"]), "GT": str(tracking["gt"]), **(extra or {})}
     return "\n".join(["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells),
                       "| " + " | ".join(cells.values()) + " |"])
+
+
+# (label, key, scale, format) of the columns of the seeds' tables
+SEED000_COLUMNS = (("MOTA [%]", "mota", 100, ".1f"), ("MOTP [m]", "motp_m", 1, ".3f"),
+                   ("FP [%]", "fp_rate", 100, ".1f"), ("miss [%]", "miss_rate", 100, ".1f"),
+                   ("IDS", "id_switches", 1, ".1f"), ("rIDS", "rids", 1, ".0f"),
+                   ("MT", "mt", 1, ".1f"), ("ML", "ml", 1, ".1f"), ("IDF1 [%]", "idf1", 100, ".1f"))
+SEED001_COLUMNS = (("TSR", "tsr", 1, ".3f"), ("MR", "miss_rate", 1, ".3f"), ("GR", "fp_rate", 1, ".3f"),
+                   ("mismatch", "id_switches", 1, ".2f"), ("id swaps", "id_swaps", 1, ".2f"),
+                   ("MOTP [cm]", "motp_m", 100, ".2f"), ("MOTA", "mota", 1, ".3f"))
+
+
+def mean_sd(results: list[dict]) -> tuple[dict, dict]:
+    """Each figure's mean and sample standard deviation (n - 1; None for one run) over repeated runs, as seed 001
+    reports its eight runs per sequence; figures undefined in a run (None) are left out of its mean."""
+    mean, sd = {}, {}
+    for key in results[0] if results else ():
+        values = [r[key] for r in results if isinstance(r.get(key), (int, float)) and not isinstance(r[key], bool)]
+        if values:
+            mean[key] = float(np.mean(values))
+            sd[key] = float(np.std(values, ddof=1)) if len(values) > 1 else None
+    return mean, sd
+
+
+def seeds_table(results: list[dict], columns=SEED001_COLUMNS) -> str:
+    """A Markdown table of the given columns as the seeds print them: the value of one run, or mean and sd."""
+    mean, sd = mean_sd(results)
+
+    def cell(key, scale, fmt, of):
+        v = of.get(key)
+        return "n/a" if v is None else format(scale * v, fmt)
+
+    head = [label for label, *_ in columns]
+    row = [cell(key, scale, fmt, mean) for _, key, scale, fmt in columns]
+    if len(results) < 2:
+        return "\n".join(["| " + " | ".join(head) + " |", "|" + "---|" * len(head), "| " + " | ".join(row) + " |"])
+    spread = [cell(key, scale, fmt, sd) for _, key, scale, fmt in columns]
+    return "\n".join(["| | " + " | ".join(head) + " |", "|" + "---|" * (len(head) + 1),
+                      f"| mean of {len(results)} | " + " | ".join(row) + " |", "| sd | " + " | ".join(spread) + " |"])

@@ -98,3 +98,21 @@ def test_existing_json_is_not_overwritten_and_missing_columns_for_options_are_na
     assert main(["evaluate", "--gt", str(tmp_path / "nope.csv"), "--tracks", tracks]) == 2
     assert "nope.csv: cannot be read" in one_error_line(capsys.readouterr().err)
     np.testing.assert_equal(sorted(p.name for p in tmp_path.iterdir()), ["gt.csv", "mine.json", "tr.csv"])
+
+
+def test_runs_are_summed_up_as_mean_and_sample_standard_deviation(tmp_path, capsys):
+    # run a: one person tracked in both frames (MOTA 1); run b: tracked in one of two frames (MOTA 0.5)
+    for name, tracks in (("a", "0,0,10,0,0,0,0\n1,0.1,10,0,0,0,0\n"), ("b", "0,0,10,0,0,0,0\n")):
+        (tmp_path / name).mkdir()
+        write(tmp_path / name / "groundtruth.csv", GT + "0,0,1,0,0,2,1,1\n1,0.1,1,0,0,2,1,1\n")
+        write(tmp_path / name / "tracks.csv", TRACKS + tracks)
+    js = tmp_path / "runs.json"
+    assert main(["evaluate", "--runs", str(tmp_path / "a"), str(tmp_path / "b"), "--json", str(js)]) == 0
+    got = json.loads(js.read_text())
+    # mean 0.75; sample sd sqrt((0.25^2 + 0.25^2) / (2 - 1))
+    assert got["mean"]["mota"] == 0.75 and got["sd"]["mota"] == pytest.approx(np.sqrt(0.125), abs=1e-12)
+    assert [r["mota"] for r in got["runs"]] == [1.0, 0.5]
+    out = capsys.readouterr().out
+    assert "| mean of 2 | 75.0 |" in out and "| sd | 35.4 |" in out
+    assert main(["evaluate", "--runs", str(tmp_path / "a"), "--gt", "x.csv"]) == 2
+    assert "expected either --gt" in one_error_line(capsys.readouterr().err)
