@@ -2,7 +2,8 @@
 beside ``mj_multiRay``, and the robot's sensor mix against real time, side by side in one run.
 
 The people walk the bench hall (crowdsim/bench.py) and are synced into the scene once; the robot stands in the
-middle facing +x. The sensor mix is the issue's: two back-to-back 70 cm lasers at 25 Hz, a 160 x 120 depth camera
+middle facing +x; the mix is also measured in the airport with 100 of its people (``airport_mix_ms``). The sensor
+mix is the issue's: two back-to-back 70 cm lasers at 25 Hz, a 160 x 120 depth camera
 at 15 Hz and a 320 x 240 wall camera at 10 Hz; its real-time factor is one simulated second over the cost of its
 calls in that second, as the loop makes them: 25 syncs of the lasers' torso-only scene and 25 batched calls casting
 both lasers (sensors/laser.py, LaserArray), and for the cameras' scene of whole people at most 25 syncs (one per
@@ -112,6 +113,44 @@ def batched_rays_us(n_people: int, quick: bool) -> dict:
     return out
 
 
+def _mix_realtime(c: dict) -> tuple[float, float]:
+    """Real-time factors of the two lasers alone and of the whole mix, from per-call milliseconds ``c``."""
+    lasers_only = LASER_HZ * (c["scene_sync_torsos_only"] + c["two_lasers_one_batched_call"]) / 1e3
+    camera_syncs = min(DEPTH_HZ + WALL_HZ, LASER_HZ)
+    mix = lasers_only + (camera_syncs * c["scene_sync"] + DEPTH_HZ * c["depth_160x120"]
+                         + WALL_HZ * c["wall_320x240_rgb_boxes"]) / 1e3
+    return 1.0 / lasers_only, 1.0 / mix
+
+
+def airport_mix_ms(quick: bool, people: int = 100) -> dict:
+    """The sensor mix's calls in the airport (airport_disembarkation_cameras after its warm-up: its walls, its
+    robot at the start, its front 160 x 120 depth camera and north-west 320 x 240 wall camera), with the first
+    ``people`` persons alive."""
+    from scenarios import load_scenario
+    from sensors.body import body_scale
+
+    from .loop import Simulation
+
+    sim = Simulation(load_scenario("airport_disembarkation_cameras"))
+    sim.warm_up()
+    while len(sim.crowd.id) < people:
+        sim.crowd.step(sim.dt, sim.robot.pose[:2], sim.robot.p["radius"])
+    agents = sim.crowd.states()
+    pick = slice(0, people)
+    person = (agents.id[pick], agents.position[pick], agents.velocity[pick], agents.walked[pick],
+              body_scale(agents.id[pick], agents.radius[pick]))
+    pose = sim.robot.pose
+    reps = 10 if quick else 60
+    depth, wall = sim.depth_cameras[0], sim.wall_cameras[0]
+    out = {"scene_sync_torsos_only": 1e3 / _rate(lambda: sim.scene.sync(pose, *person), reps),
+           "two_lasers_one_batched_call": 1e3 / _rate(lambda: sim.laser_array.scan(0.0, pose, [0, 1]), reps),
+           "scene_sync": 1e3 / _rate(lambda: sim.camera_scene.sync(pose, *person), reps),
+           "depth_160x120": 1e3 / _rate(lambda: depth.capture(0.0), max(3, reps // 3)),
+           "wall_320x240_rgb_boxes": 1e3 / _rate(lambda: wall.capture(0.0), max(3, reps // 3)),
+           "renderer": depth.backend, "people_in_wall_image": int(len(wall.capture(0.0).ids))}
+    return out
+
+
 def run_sensor_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
     print(f"crowdsim bench sensors on {platform.processor() or platform.machine()}, Python "
           f"{platform.python_version()}{' (quick)' if quick else ''}")
@@ -126,16 +165,17 @@ def run_sensor_benchmarks(json_path: str | None = None, quick: bool = False) -> 
     print("\n762 rays of two lasers, 100 people (torsos):")
     for key, value in rays.items():
         print(f"  {key:40s} {value:9.3g} {'m' if key.startswith('max') else 'us per call'}", flush=True)
-    c = figures["per_call_ms"][100]
-    lasers_only = LASER_HZ * (c["scene_sync_torsos_only"] + c["two_lasers_one_batched_call"]) / 1e3
-    camera_syncs = min(DEPTH_HZ + WALL_HZ, LASER_HZ)
-    mix = lasers_only + (camera_syncs * c["scene_sync"] + DEPTH_HZ * c["depth_160x120"]
-                         + WALL_HZ * c["wall_320x240_rgb_boxes"]) / 1e3
-    figures["realtime_factor_lasers_only"] = 1.0 / lasers_only
-    figures["realtime_factor_sensor_mix"] = 1.0 / mix
-    print(f"\n100 people, sensor cost per simulated second ({c['renderer']}):")
-    print(f"  two lasers @25 Hz (torsos only)          {1 / lasers_only:9.1f} x real time (target 20x)")
-    print(f"  + 160x120 depth @15 Hz + 320x240 wall @10 Hz {1 / mix:6.1f} x real time (target 5x)")
+    airport = figures["airport_per_call_ms"] = airport_mix_ms(quick)
+    for place, c in (("bench hall", figures["per_call_ms"][100]), ("airport", airport)):
+        lasers_only, mix = figures[f"realtime_{place.replace(' ', '_')}"] = _mix_realtime(c)
+        print(f"\n100 people in the {place}, sensor cost per simulated second ({c['renderer']}; "
+              f"{c['people_in_wall_image']} in the wall image):")
+        print(f"  two lasers @25 Hz (torsos only)              {lasers_only:9.1f} x real time (target 20x)")
+        print(f"  + 160x120 depth @15 Hz + 320x240 wall @10 Hz {mix:9.1f} x real time (target 5x)")
+        if place == "airport":
+            for key, value in c.items():
+                if key not in ("renderer", "people_in_wall_image"):
+                    print(f"    {key:40s} {value:9.3f} ms per call")
     if json_path:
         with open(json_path, "w") as f:
             json.dump(figures, f, indent=2)

@@ -136,6 +136,10 @@ def _over_time(path, events) -> None:
     plt.close(fig)
 
 
+def _metres(v) -> str:
+    return "n/a" if v is None else f"{v:.3f} m"
+
+
 def write_report(out: Path, run_dir: Path, walls: np.ndarray, threshold: float, title: str) -> dict:
     """Write report.md and its figures into ``out`` from the run in ``run_dir``; return the tracking figures."""
     out, run_dir = Path(out), Path(run_dir)
@@ -161,6 +165,13 @@ def write_report(out: Path, run_dir: Path, walls: np.ndarray, threshold: float, 
         f"| {tracking['mt']} | {tracking['pt']} | {tracking['ml']} | {tracking['persons']} | "
         f"{tracking['fragmentations']} | {pct(tracking['idf1'])} | {pct(tracking['idp'])} | "
         f"{pct(tracking['idr'])} | {tracking['id_swaps']} | {tracking['reinitialisations']} |", "",
+        "| HOTA | DetA | AssA | LocA | OSPA | localisation | cardinality | OSPA-T |",
+        "|---|---|---|---|---|---|---|---|",
+        f"| {pct(tracking['hota'])} | {pct(tracking['deta'])} | {pct(tracking['assa'])} | {pct(tracking['loca'])} | "
+        f"{_metres(tracking['ospa_m'])} | {_metres(tracking['ospa_localisation_m'])} | "
+        f"{_metres(tracking['ospa_cardinality_m'])} | {_metres(tracking['ospa_t_m'])} |", "",
+        "HOTA after Luiten et al. 2021 for points (similarity max(0, 1 - d / 2 m), alpha 0.05-0.95); OSPA after "
+        "Schuhmacher et al. 2008 with c = 1 m, p = 1, and OSPA-T's labelling term (Ristic et al. 2011).", "",
         f"## Seed 001's set at {SEED001_THRESHOLD:g} m", "", seeds_table([seed001], SEED001_COLUMNS), "",
         "## What happened", "",
         "![top-down view: ground truth thin grey, tracks coloured by id, ID switches as crosses at the person, "
