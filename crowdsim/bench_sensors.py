@@ -6,8 +6,8 @@ middle facing +x; the mix is also measured in the airport with 100 of its people
 mix is the issue's: two back-to-back 70 cm lasers at 25 Hz, a 160 x 120 depth camera
 at 15 Hz and a 320 x 240 wall camera at 10 Hz; its real-time factor is one simulated second over the cost of its
 calls in that second, as the loop makes them: 25 syncs of the lasers' torso-only scene and 25 batched calls casting
-both lasers (sensors/laser.py, LaserArray), and for the cameras' scene of whole people at most 25 syncs (one per
-tick a camera is due), 15 depth and 10 wall images.
+both lasers (sensors/laser.py, LaserArray), and for the cameras' scene of whole people a sync at each tick a camera
+is due (20 a second), 15 depth and 10 wall images.
 """
 
 from __future__ import annotations
@@ -113,21 +113,37 @@ def batched_rays_us(n_people: int, quick: bool) -> dict:
     return out
 
 
+def camera_ticks(tick: float = 1 / LASER_HZ, seconds: float = 1.0) -> int:
+    """Ticks in ``seconds`` at which a camera is due, scheduled as the loop does (crowdsim/loop.py: a camera is due
+    once the clock reaches its next time, which then moves on by its period): 20 a second for 15 and 10 Hz on
+    0.04 s ticks, each one sync of the cameras' scene."""
+    due, next_depth, next_wall = 0, 0.0, 0.0
+    for k in range(int(round(seconds / tick))):
+        stamp, hit = k * tick, False
+        while next_depth <= stamp + 1e-9:
+            next_depth, hit = next_depth + 1 / DEPTH_HZ, True
+        while next_wall <= stamp + 1e-9:
+            next_wall, hit = next_wall + 1 / WALL_HZ, True
+        due += hit
+    return due
+
+
 def _mix_realtime(c: dict) -> tuple[float, float]:
     """Real-time factors of the two lasers alone and of the whole mix, from per-call milliseconds ``c``."""
     lasers_only = LASER_HZ * (c["scene_sync_torsos_only"] + c["two_lasers_one_batched_call"]) / 1e3
-    camera_syncs = min(DEPTH_HZ + WALL_HZ, LASER_HZ)
+    camera_syncs = camera_ticks()
     mix = lasers_only + (camera_syncs * c["scene_sync"] + DEPTH_HZ * c["depth_160x120"]
                          + WALL_HZ * c["wall_320x240_rgb_boxes"]) / 1e3
     return 1.0 / lasers_only, 1.0 / mix
 
 
 def airport_mix_ms(quick: bool, people: int = 100) -> dict:
-    """The sensor mix's calls in the airport (airport_disembarkation_cameras after its warm-up: its walls, its
-    robot at the start, its front 160 x 120 depth camera and north-west 320 x 240 wall camera), with the first
-    ``people`` persons alive."""
+    """The sensor mix's calls in the airport (airport_disembarkation_cameras after its warm-up and until ``people``
+    are alive: its walls, its robot at the start, its front 160 x 120 depth camera without colour and its
+    north-west 320 x 240 wall camera), with the first ``people`` persons alive."""
     from scenarios import load_scenario
     from sensors.body import body_scale
+    from sensors.camera import DepthCamera
 
     from .loop import Simulation
 
@@ -141,7 +157,9 @@ def airport_mix_ms(quick: bool, people: int = 100) -> dict:
               body_scale(agents.id[pick], agents.radius[pick]))
     pose = sim.robot.pose
     reps = 10 if quick else 60
-    depth, wall = sim.depth_cameras[0], sim.wall_cameras[0]
+    # the issue's mix: a depth camera without colour (the scenario's front camera has it), a wall camera with it
+    depth = DepthCamera(dict(sim.depth_cameras[0].p, rgb=False), sim.camera_scene, np.random.default_rng(0))
+    wall = sim.wall_cameras[0]
     out = {"scene_sync_torsos_only": 1e3 / _rate(lambda: sim.scene.sync(pose, *person), reps),
            "two_lasers_one_batched_call": 1e3 / _rate(lambda: sim.laser_array.scan(0.0, pose, [0, 1]), reps),
            "scene_sync": 1e3 / _rate(lambda: sim.camera_scene.sync(pose, *person), reps),

@@ -75,27 +75,42 @@ def ray_capsule(wx, wy, wz, dx, dy, dz, e, r) -> np.ndarray:
                                        ray_sphere(wx - ex, wy - ey, wz - ez, dx, dy, dz, r)))
 
 
-def cast(scene, slot: np.ndarray, o: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def cast(scene, slot: np.ndarray, o: np.ndarray, d: np.ndarray,
+         candidates: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Ray parameters t [n] (inf for a miss) of rays from ``o`` [3] along ``d`` [n, 3] to the body of the person in
-    ``slot[i]`` of the scene, each body at its own size, and the part each ray meets first."""
-    x, y = scene.person_xy[slot].T.astype(F)
-    k = scene.person_scale[slot].astype(F)
-    ox, oy, oz = (F(c) for c in o)
-    dx, dy, dz = d.T.astype(F)
-    t = np.empty((4, len(slot)), F)
-    t[TORSO] = ray_vertical_cylinder(ox - x, oy - y, oz, dx, dy, dz, F(body.TORSO_RADIUS) * k,
-                                     F(body.TORSO_BOTTOM) * k, F(body.TORSO_TOP) * k)
-    t[HEAD] = ray_sphere(ox - x, oy - y, oz - F(body.HEAD_CENTRE) * k, dx, dy, dz, F(body.HEAD_RADIUS) * k)
-    for part, leg in ((LEFT_LEG, 0), (RIGHT_LEG, 1)):
-        a, b = scene.hips[slot, leg].astype(F), scene.feet[slot, leg].astype(F)
-        t[part] = ray_capsule(ox - a[:, 0], oy - a[:, 1], oz - a[:, 2], dx, dy, dz, b - a, F(body.LEG_RADIUS) * k)
+    ``slot[i]`` of the scene, each body at its own size, and the part each ray meets first. ``candidates`` [4, n]:
+    the rays that may meet each part (the rest are not tested against it), from the parts' projected boxes."""
+    n = len(slot)
+    t = np.full((4, n), np.inf, F)
+    for part in range(4):
+        rays = slice(None) if candidates is None else np.flatnonzero(candidates[part])
+        sl = slot[rays]
+        k = scene.person_scale[sl].astype(F)
+        ox, oy, oz = (F(c) for c in o)
+        dx, dy, dz = d[rays].T.astype(F)
+        if part in (TORSO, HEAD):
+            x, y = scene.person_xy[sl].T.astype(F)
+            if part == TORSO:
+                t[part, rays] = ray_vertical_cylinder(ox - x, oy - y, oz, dx, dy, dz, F(body.TORSO_RADIUS) * k,
+                                                      F(body.TORSO_BOTTOM) * k, F(body.TORSO_TOP) * k)
+            else:
+                t[part, rays] = ray_sphere(ox - x, oy - y, oz - F(body.HEAD_CENTRE) * k, dx, dy, dz,
+                                           F(body.HEAD_RADIUS) * k)
+        else:
+            leg = part - LEFT_LEG
+            a, b = scene.hips[sl, leg].astype(F), scene.feet[sl, leg].astype(F)
+            t[part, rays] = ray_capsule(ox - a[:, 0], oy - a[:, 1], oz - a[:, 2], dx, dy, dz, b - a,
+                                        F(body.LEG_RADIUS) * k)
     part = np.argmin(t, axis=0)
-    return t[part, np.arange(len(slot))], part
+    return t[part, np.arange(n)], part
+
+
+PART_CORNERS = (slice(0, 8), slice(8, 16), slice(16, 24), slice(24, 32))  # of part_box_corners, by part
 
 
 def part_box_corners(scene, slot: np.ndarray) -> np.ndarray:
-    """Corners [n, 48, 3] of boxes round each person's torso, head and both legs: their projection bounds the
-    person's in a camera that has all of them in front."""
+    """Corners [n, 32, 3] of boxes round each person's torso, head, left leg and right leg (``PART_CORNERS``): their
+    projection bounds each part's, and the person's, in a camera that has all of them in front."""
     k = scene.person_scale[slot][:, None, None]
     unit = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
     centre = np.zeros((len(slot), 1, 3))
@@ -103,34 +118,35 @@ def part_box_corners(scene, slot: np.ndarray) -> np.ndarray:
     mid, half = (body.TORSO_BOTTOM + body.TORSO_TOP) / 2, (body.TORSO_TOP - body.TORSO_BOTTOM) / 2
     torso = centre + [0.0, 0.0, mid] * k + unit * [body.TORSO_RADIUS, body.TORSO_RADIUS, half] * k
     head = centre + [0.0, 0.0, body.HEAD_CENTRE] * k + unit * body.HEAD_RADIUS * k
-    ends = np.concatenate([scene.hips[slot], scene.feet[slot]], 1)  # [n, 4, 3]: the legs' axes' ends
-    legs = (ends[:, :, None, :] + unit * body.LEG_RADIUS * k[:, :, None]).reshape(len(slot), -1, 3)
-    return np.concatenate([torso, head, legs], 1)
+    legs = []
+    for leg in (0, 1):  # the box round the leg's axis, grown by its radius
+        ends = np.stack([scene.hips[slot, leg], scene.feet[slot, leg]], 1)
+        lo, hi = ends.min(axis=1) - body.LEG_RADIUS * k[:, 0], ends.max(axis=1) + body.LEG_RADIUS * k[:, 0]
+        legs.append((lo + hi)[:, None] / 2 + unit * (hi - lo)[:, None] / 2)
+    return np.concatenate([torso, head, *legs], 1)
 
 
 def normals(scene, slot: np.ndarray, part: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Outward unit normals [n, 3] at surface points [n, 3] of the given parts of the persons in ``slot``."""
-    k = scene.person_scale[slot][:, None]
-    centre = np.zeros_like(points)
-    centre[:, :2] = scene.person_xy[slot]
-    # torso: horizontal from its axis on the side, vertical on the flat ends
-    n = points - centre
-    n[:, 2] = 0.0
-    torso = part == TORSO
-    on_side = np.linalg.norm(n, axis=1) > 0.98 * body.TORSO_RADIUS * k[:, 0]
-    cap = torso & ~on_side
-    n[cap] = 0.0
-    n[cap, 2] = np.sign(points[cap, 2] - (body.TORSO_BOTTOM + body.TORSO_TOP) / 2 * k[cap, 0])
-    head = part == HEAD
-    n[head] = points[head] - centre[head]
-    n[head, 2] -= body.HEAD_CENTRE * k[head, 0]
+    """Outward unit normals [n, 3] at surface points [n, 3] of the given parts of the persons in ``slot``: from the
+    nearest point of the part's axis (the torso's vertical axis at the point's height, the head's centre, the leg's
+    segment), vertical on the torso's flat ends."""
+    k = scene.person_scale[slot]
+    axis = np.empty_like(points)
+    axis[:, :2] = scene.person_xy[slot]
+    axis[:, 2] = np.where(part == HEAD, body.HEAD_CENTRE * k, points[:, 2])
     for p, leg in ((LEFT_LEG, 0), (RIGHT_LEG, 1)):
-        sel = part == p
-        a, b = scene.hips[slot[sel], leg], scene.feet[slot[sel], leg]
-        e = b - a
-        s = np.clip(np.einsum("ij,ij->i", points[sel] - a, e) / np.einsum("ij,ij->i", e, e), 0, 1)
-        n[sel] = points[sel] - (a + s[:, None] * e)
-    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+        sel = np.flatnonzero(part == p)
+        a = scene.hips[slot[sel], leg]
+        e = scene.feet[slot[sel], leg] - a
+        s = np.clip(((points[sel] - a) * e).sum(axis=1) / (e * e).sum(axis=1), 0, 1)
+        axis[sel] = a + s[:, None] * e
+    n = points - axis
+    length = np.sqrt((n * n).sum(axis=1))
+    cap = (part == TORSO) & (length < 0.98 * body.TORSO_RADIUS * k)
+    n[cap] = 0.0
+    n[cap, 2] = np.sign(points[cap, 2] - (body.TORSO_BOTTOM + body.TORSO_TOP) / 2 * k[cap])
+    length[cap] = 1.0
+    return n / np.maximum(length, 1e-12)[:, None]
 
 
 def colours(person_ids: np.ndarray, part: np.ndarray) -> np.ndarray:

@@ -76,7 +76,8 @@ class GLRenderer:
     colour pass alone. ``people=False`` draws the world without the people.
     """
 
-    def __init__(self, scene: Scene, intrinsics: Intrinsics, rgb: bool = False, people: bool = True):
+    def __init__(self, scene: Scene, intrinsics: Intrinsics, rgb: bool = False, people: bool = True,
+                 range_max: float = np.inf):
         self.backend = os.environ.get("MUJOCO_GL", "glfw")
         self.scene = scene
         self.intrinsics = intrinsics
@@ -93,6 +94,7 @@ class GLRenderer:
         self.option.geomgroup[:] = 1  # body parts live in groups 1-3; MuJoCo shows only 0-2 by default
         self.option.geomgroup[TORSO_GROUP:LEG_GROUP + 1] = people
         self.people = people
+        self.range_max = range_max  # people wholly farther than this (z-depth) are not drawn
         self.camera = mujoco.MjvCamera()
         self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
         self.ids = mujoco.MjvScene(m, maxgeom=m.ngeom + 100)
@@ -115,8 +117,9 @@ class GLRenderer:
         mujoco.mjr_render(self.rect, scene, self.mjr)
 
     def _out_of_view(self, camera: str) -> np.ndarray:
-        """Geoms of the persons whose bounding sphere lies wholly outside the camera's view: drawing costs per geom
-        under Mesa, wherever the geom lands, so these are hidden while the camera draws."""
+        """Geoms of the persons whose bounding sphere lies wholly outside the camera's view or beyond its range
+        (where a depth camera measures nothing): drawing costs per geom under Mesa, wherever the geom lands, so
+        these are hidden while the camera draws."""
         s = self.scene
         size = s.person_scale[:s.alive]
         centre = np.column_stack([s.person_xy[:s.alive], body.HEIGHT / 2 * size])
@@ -125,7 +128,8 @@ class GLRenderer:
         k = self.intrinsics
         tan_x, tan_y = k.width / 2 / k.f, k.height / 2 / k.f
         r = (body.HEIGHT / 2 + body.LEG_LENGTH * np.sin(body.SWING_AMPLITUDE)) * size  # a sphere round each person
-        outside = ((c[:, 2] < -r) | (np.abs(c[:, 0]) - r * np.hypot(1, tan_x) > c[:, 2] * tan_x)
+        outside = ((c[:, 2] < -r) | (c[:, 2] - r > self.range_max)
+                   | (np.abs(c[:, 0]) - r * np.hypot(1, tan_x) > c[:, 2] * tan_x)
                    | (np.abs(c[:, 1]) - r * np.hypot(1, tan_y) > c[:, 2] * tan_y))
         return s.person_geoms(np.flatnonzero(outside))
 
@@ -214,11 +218,11 @@ def shade(colour: np.ndarray, normal: np.ndarray, view: np.ndarray) -> np.ndarra
 
 
 def make_renderer(scene: Scene, intrinsics: Intrinsics, exclude_body: int = -1, rgb: bool = False,
-                  people: bool = True):
+                  people: bool = True, range_max: float = np.inf):
     """MuJoCo's GL renderer where a context can be made, else ray casting."""
     if os.environ.get("MUJOCO_GL", "") not in ("disable", "disabled", "off", "false", "0"):
         try:
-            return GLRenderer(scene, intrinsics, rgb, people)
+            return GLRenderer(scene, intrinsics, rgb, people, range_max)
         except Exception:  # no usable GL context: fall back, and the backend name says so
             pass
     return RaycastRenderer(scene, intrinsics, exclude_body, people)
@@ -245,7 +249,8 @@ class DepthCamera:
         self.rng = rng
         self.intrinsics = Intrinsics(params["width"], params["height"], params["fovy_deg"])
         self.period = 1.0 / params["rate"]
-        self.renderer = make_renderer(scene, self.intrinsics, scene.robot_body, params["rgb"])
+        self.renderer = make_renderer(scene, self.intrinsics, scene.robot_body, params["rgb"],
+                                      range_max=params["range_max"])
         self._rays = self.intrinsics.pixel_directions()
 
     @property
@@ -261,7 +266,10 @@ class DepthCamera:
         valid = (z >= self.p["range_min"]) & (z <= self.p["range_max"])
         z = np.where(valid, z, np.nan).astype(np.float32)
         points = self._rays[valid] * z[valid][:, None]
-        return DepthFrame(stamp, self.name, z, points, self.scene.person_of_geom(out["geom"]), out.get("rgb"))
+        # person ids where the camera measured something: beyond its range it sees no one (and the GL renderer
+        # does not even draw people there)
+        person = np.where(valid, self.scene.person_of_geom(out["geom"]), -1)
+        return DepthFrame(stamp, self.name, z, points, person, out.get("rgb"))
 
     def visibility(self, frame: DepthFrame) -> tuple[np.ndarray, np.ndarray]:
         """Ids of the persons the image shows and the share of each that shows (the scene as at the capture)."""
@@ -372,7 +380,14 @@ def person_pixels(scene: Scene, camera: str, intrinsics: Intrinsics, slots: np.n
     inside = (u >= 0) & (u < k.width) & (v >= 0) & (v < k.height)
     keep = inside | ((u % 2 == 0) & (v % 2 == 0))
     owner, u, v, inside = owner[keep], u[keep], v[keep], inside[keep]
-    z, part = bodycast.cast(scene, slots[owner], origin, k.rays(u, v) @ rot.T)  # rays of optical z = 1: t is z
+    # each part is tested only on the pixels of its own projected box
+    part_lo = np.stack([np.floor(uv[:, c].min(axis=1)) for c in bodycast.PART_CORNERS], 1)  # [n, 4 parts, 2]
+    part_hi = np.stack([np.ceil(uv[:, c].max(axis=1)) for c in bodycast.PART_CORNERS], 1)
+    plo, phi = part_lo[owner], part_hi[owner]
+    candidates = ((u[:, None] >= plo[..., 0]) & (u[:, None] < phi[..., 0]) & (v[:, None] >= plo[..., 1])
+                  & (v[:, None] < phi[..., 1])).T
+    rays = (k.rays(u, v) @ rot.T).astype(np.float32)  # optical z = 1: the ray parameter t is the z-depth
+    z, part = bodycast.cast(scene, slots[owner], origin, rays, candidates)
     hit = np.isfinite(z)
     return owner[hit], u[hit], v[hit], z[hit], part[hit], np.where(inside[hit], 1.0, 4.0)
 
@@ -393,12 +408,10 @@ def _boxes_of(owner: np.ndarray, u: np.ndarray, v: np.ndarray, n: int) -> np.nda
     """(u0, v0, u1, v1) around each owner's pixels (zeros for an owner without any)."""
     boxes = np.zeros((n, 4))
     if len(owner):
-        big = np.iinfo(np.int64).max
-        lo_u, lo_v, hi_u, hi_v = np.full(n, big), np.full(n, big), np.full(n, -big), np.full(n, -big)
-        np.minimum.at(lo_u, owner, u)  # one-dimensional: numpy's fast path
-        np.minimum.at(lo_v, owner, v)
-        np.maximum.at(hi_u, owner, u)
-        np.maximum.at(hi_v, owner, v)
-        seen = lo_u <= hi_u
-        boxes[seen] = np.stack([lo_u, lo_v, hi_u + 1, hi_v + 1], 1)[seen]
+        if (np.diff(owner) < 0).any():
+            order = np.argsort(owner, kind="stable")
+            owner, u, v = owner[order], u[order], v[order]
+        starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
+        boxes[owner[starts]] = np.stack([np.minimum.reduceat(u, starts), np.minimum.reduceat(v, starts),
+                                         np.maximum.reduceat(u, starts) + 1, np.maximum.reduceat(v, starts) + 1], 1)
     return boxes

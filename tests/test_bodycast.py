@@ -71,3 +71,16 @@ def test_a_wall_camera_shows_people_in_their_colours_and_not_through_walls(rende
     # 8-bit step)
     np.testing.assert_allclose(pixel, top, atol=1.5 / 255)
     assert frame.visible_fraction[0] == pytest.approx(1.0, abs=0.03)
+
+
+def test_normals_of_each_part():
+    # one adult standing at (2, 3), legs straight: points on the torso's side and top, the head and a leg
+    scene = Scene(np.zeros((0, 2, 2)), 0.425, 1)
+    scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1]), np.array([[2.0, 3.0]]))
+    r, hip = body.TORSO_RADIUS, body.HIP_HALF_WIDTH
+    points = np.array([[2.0 + r, 3.0, 1.0], [2.0, 3.1, body.TORSO_TOP], [2.0, 3.0 - body.HEAD_RADIUS, body.HEAD_CENTRE],
+                       [2.0 - body.LEG_RADIUS, 3.0 + hip, 0.4], [2.0, 3.0 - hip, 0.0]])
+    part = np.array([bodycast.TORSO, bodycast.TORSO, bodycast.HEAD, bodycast.LEFT_LEG, bodycast.RIGHT_LEG])
+    n = bodycast.normals(scene, np.zeros(5, np.int64), part, points)
+    # side: +x; flat top: +z; head: -y; the left leg's back: -x; the right foot's tip, below the axis's end: -z
+    np.testing.assert_allclose(n, [[1, 0, 0], [0, 0, 1], [0, -1, 0], [-1, 0, 0], [0, 0, -1]], atol=1e-9)
