@@ -11,9 +11,9 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from evaluation import ClearMot, FrameResult
+from evaluation.occlusion import seed000_visible
 from pipeline.fusion import fuse, to_frame
 from pipeline.frames import inverse, transform_points
 from pipeline.laser_detector import SegmentDetector
@@ -34,7 +34,6 @@ TRACKING_FRAME = "odom"
 # the ground truth reaches this far beyond the evaluation's range, ignored there (neither missed nor, when a track
 # matches them, a false positive): a track of a person just beyond the limit is no false positive
 GT_MARGIN = 2.0  # m
-SEED000_SHIFT, SEED000_RADIUS = 0.2, 0.3  # m, seed 000 Sec. IV-B's occlusion test
 
 
 @dataclass
@@ -156,18 +155,12 @@ class Simulation:
         distance = np.linalg.norm(xy - self.robot.pose[:2], axis=1)
         lasers = [k for k, name in enumerate(visibility.sensors) if name in {scan.frame for scan in scans}]
         beams = visibility.amount[near][:, lasers].sum(axis=1).astype(np.int64) if lasers else np.zeros(len(xy), int)
-        # seed 000 (Sec. IV-B): a laser point within 0.3 m of the position moved 0.2 m towards that laser
         seed000 = np.zeros(len(xy), bool)
         by_name = {laser.name: laser for laser in self.lasers}
         for scan in scans:
             pose = by_name[scan.frame].pose_in(self.robot.pose)
             points = scan.points()
-            points = transform_points(pose, points[np.isfinite(points[:, 0])])
-            if len(points) and len(xy):
-                towards = pose[:2] - xy
-                shifted = xy + SEED000_SHIFT * towards / np.maximum(np.linalg.norm(towards, axis=1), 1e-9)[:, None]
-                nearest, _ = cKDTree(points).query(shifted, distance_upper_bound=SEED000_RADIUS)
-                seed000 |= np.isfinite(nearest)
+            seed000 |= seed000_visible(xy, pose[:2], transform_points(pose, points[np.isfinite(points[:, 0])]))
         return GroundTruthTags(distance, distance <= self.max_range, beams, beams > 0, seed000)
 
     def step(self) -> Frame | None:

@@ -1,0 +1,23 @@
+"""Seed 000's occlusion test on hand-worked geometry."""
+
+import numpy as np
+
+from evaluation.occlusion import seed000_visible
+
+
+def arc(centre, radius, from_deg, to_deg):
+    a = np.radians(np.linspace(from_deg, to_deg, 37))
+    return np.column_stack([centre[0] + radius * np.cos(a), centre[1] + radius * np.sin(a)])
+
+
+def test_seed000_rule_on_a_person_seen_and_one_behind_them():
+    # a laser at the origin sees the front arc of person A (torso radius 0.18 m) at (5, 0): A's position moved 0.2 m
+    # towards the laser, (4.8, 0), lies 0.02 m from A's nearest point (4.82, 0): visible
+    points = arc((5.0, 0.0), 0.18, 100, 260)
+    # person B 0.38 m behind A gets no beam, but A's outermost point (5 + 0.18 cos 100deg, 0.18 sin 100deg) =
+    # (4.969, 0.177) is sqrt(0.211^2 + 0.177^2) = 0.275 m from B's shifted position (5.18, 0): seed 000's rule calls
+    # B visible; person C 0.5 m behind A: that point is sqrt(0.331^2 + 0.177^2) = 0.375 m away: occluded
+    # person D off to the side at (3, 4) with no points near: occluded
+    got = seed000_visible(np.array([[5.0, 0.0], [5.38, 0.0], [5.5, 0.0], [3.0, 4.0]]), np.zeros(2), points)
+    assert got.tolist() == [True, True, False, False]
+    assert seed000_visible(np.array([[5.0, 0.0]]), np.zeros(2), np.full((3, 2), np.nan)).tolist() == [False]
