@@ -17,6 +17,14 @@ from scenarios import load_scenario, scenario_from_dict
 HALL = 40.0  # m, side of the walled hall the crowd benchmark walks in
 
 
+def write_figures(json_path: str | None, figures: dict) -> None:
+    """The figures as JSON, when asked for (the command checked the file is new before measuring)."""
+    if json_path:
+        with open(json_path, "x") as f:
+            json.dump(figures, f, indent=2)
+            f.write("\n")
+
+
 def _rate(fn, calls: int, blocks: int = 5) -> float:
     """Median calls/s of ``fn`` over ``blocks`` timed blocks of ``calls`` calls (one untimed block first)."""
     for _ in range(max(1, calls // 5)):
@@ -141,8 +149,5 @@ def run_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
     show("loop_realtime_factor", loop["realtime_factor"], "x real time",
          f"airport loop, 2 lasers @25 Hz + tracker + CLEAR-MOT ({loop['mean_persons_in_range']:.0f} in range)")
     figures["loop"] = loop
-    if json_path:
-        with open(json_path, "w") as f:
-            json.dump(figures, f, indent=2)
-            f.write("\n")
+    write_figures(json_path, figures)
     return figures

@@ -10,13 +10,14 @@ is the median of three timed runs over the whole sequence.
 
 from __future__ import annotations
 
-import json
 import platform
 import time
 
 import numpy as np
 
 from evaluation import Sequence
+
+from .bench import write_figures
 
 FRAMES, PERSONS = 5000, 80
 
@@ -72,8 +73,5 @@ def run_eval_benchmark(json_path: str | None = None, quick: bool = False) -> dic
                                ("HOTA (19 alphas)", "hota", ""), ("OSPA and OSPA-T", "ospa", ""),
                                ("all of these together (crowdsim evaluate)", "all_of_it", "")):
         print(f"  {label:50s} {figures[key + '_frames_per_s']:9.0f} frames/s{target}")
-    if json_path:
-        with open(json_path, "w") as f:
-            json.dump(figures, f, indent=2)
-            f.write("\n")
+    write_figures(json_path, figures)
     return figures

@@ -12,12 +12,11 @@ is due (20 a second), 15 depth and 10 wall images.
 
 from __future__ import annotations
 
-import json
 import platform
 
 import numpy as np
 
-from .bench import HALL, _rate, populated_crowd
+from .bench import HALL, _rate, populated_crowd, write_figures
 
 DEPTH = {"name": "front_depth", "position": [0.45, 0.0, 1.45], "yaw": 0.0, "pitch": 0.1, "fovy_deg": 43.0,
          "width": 160, "height": 120, "rate": 15.0, "range_min": 0.5, "range_max": 8.0, "noise": "kinect",
@@ -194,8 +193,5 @@ def run_sensor_benchmarks(json_path: str | None = None, quick: bool = False) -> 
             for key, value in c.items():
                 if key not in ("renderer", "people_in_wall_image"):
                     print(f"    {key:40s} {value:9.3f} ms per call")
-    if json_path:
-        with open(json_path, "w") as f:
-            json.dump(figures, f, indent=2)
-            f.write("\n")
+    write_figures(json_path, figures)
     return figures

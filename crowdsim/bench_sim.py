@@ -29,7 +29,6 @@ Set-up (the same for both simulators and for every agent count):
 
 from __future__ import annotations
 
-import json
 import platform
 import sys
 import time
@@ -37,6 +36,8 @@ import time
 import numpy as np
 
 from scenarios import scenario_from_dict
+
+from .bench import write_figures
 
 CORRIDOR_LENGTH = 250.0  # m
 CORRIDOR_WIDTH = 20.0  # m
@@ -227,10 +228,7 @@ def run_sim_benchmark(counts=(100, 1000, 5000), quick: bool = False, json_path: 
     else:
         print(f"ours dt {OURS_DT:g} s, JuPedSim dt {figures.get('jupedsim_dt', float('nan')):g} s; ratio > 1: ours "
               "simulates faster")
-    if json_path:
-        with open(json_path, "w") as f:
-            json.dump(figures, f, indent=2)
-            f.write("\n")
+    write_figures(json_path, figures)
     return figures
 
 

@@ -152,6 +152,10 @@ def _cmd_validate(args) -> int:
 
 
 def _cmd_bench(args) -> int:
+    from evaluation.io import EvaluationInputError
+
+    if args.json and Path(args.json).exists():
+        raise EvaluationInputError(f"--json {args.json}: already exists; expected a new file (nothing was measured)")
     if args.what == "sim":
         from .bench_sim import run_sim_benchmark
 

@@ -9,21 +9,9 @@ import pytest
 from scipy.optimize import linear_sum_assignment
 
 from evaluation.ospa import ospa, track_labels
-from evaluation.sequence import Sequence
+from test_hota import approx, seq
 
 KEYS = {"ospa", "localisation", "cardinality", "ospa_t", "frames", "labelled_tracks", "per_frame"}
-
-
-def seq(*rows):
-    """A Sequence from (frame, id, x, y) rows."""
-    if not rows:
-        return Sequence.from_rows([], [], np.zeros((0, 2)))
-    f, i, x, y = zip(*rows)
-    return Sequence.from_rows(f, i, np.column_stack([x, y]))
-
-
-def approx(x):
-    return pytest.approx(x, abs=1e-12)
 
 
 def test_one_pair_0_3_m_apart():
