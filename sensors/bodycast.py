@@ -149,7 +149,8 @@ def normals(scene, slot: np.ndarray, part: np.ndarray, points: np.ndarray) -> np
     return n / np.maximum(length, 1e-12)[:, None]
 
 
-def colours(person_ids: np.ndarray, part: np.ndarray) -> np.ndarray:
-    """RGB [n, 3] in [0, 1] of the given parts of these persons: their top, skin or trousers (sensors/body.py)."""
+def colours(person_ids: np.ndarray) -> np.ndarray:
+    """RGB [n, 4, 3] in [0, 1] of each person's parts in ``cast``'s order: their top, skin, and trousers twice
+    (sensors/body.py)."""
     top, trousers = body.clothing(person_ids)
-    return np.where((part == TORSO)[:, None], top, np.where((part == HEAD)[:, None], body.SKIN, trousers))
+    return np.stack([top, np.broadcast_to(body.SKIN, top.shape), trousers, trousers], 1)

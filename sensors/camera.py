@@ -336,7 +336,8 @@ class WallCamera:
             view = k.rays(u[shows], v[shows]) @ rot.T
             sl, pt = slots[owner[shows]], part[shows]
             surface = bodycast.normals(s, sl, pt, origin + z[shows, None] * view)
-            rgb.reshape(-1, 3)[pixel[shows]] = shade(bodycast.colours(s.slot_person_id[sl], pt), surface, view)
+            colour = bodycast.colours(s.slot_person_id[slots])[owner[shows], pt]  # a palette per person, looked up
+            rgb.reshape(-1, 3)[pixel[shows]] = shade(colour, surface, view)
         # per person: the pixels that show against all of the silhouette's
         full = np.bincount(owner, weights=weight, minlength=len(slots))
         seen = np.bincount(owner[shows], minlength=len(slots))
