@@ -3,7 +3,8 @@
 From the files a run writes (groundtruth.csv, tracks.csv, detections.csv, robot.csv), re-scored here frame by frame:
 report.md with the tracking tables (seed 000's set at the run's threshold, seed 001's at 0.3 m, identity and
 trajectory measures), a top-down picture of what happened (ground truth thin, tracks coloured by id, ID switches
-and false positives marked), the per-frame counts, the metrics over time, and an animated SVG top-down view.
+and false positives marked), the per-frame counts, the metrics over time, and an animated SVG top-down view
+(evaluation/svg.py).
 Everything is drawn in the tracking frame (odom); walls are moved there with the first cycle's true odom pose.
 """
 
@@ -22,7 +23,9 @@ from .clearmot import ClearMot, evaluate, score_frames  # noqa: E402
 from .io import load_sequence, read_table  # noqa: E402
 from .score import SEED001_COLUMNS, pct, score_tracking, seeds_table, tracking_table  # noqa: E402
 from .sequence import Sequence  # noqa: E402
+from .svg import write_svg  # noqa: E402
 
+TRACK_COLUMNS = ("frame", "t", "id", "x", "y", "vx", "vy")
 ROBOT_COLUMNS = ("frame", "t", "x", "y", "yaw", "odom_x", "odom_y", "odom_yaw")
 SEED001_THRESHOLD = 0.3  # m, seed 001 Sec. 4: "within a 30 cm radius of the ground truth"
 
@@ -136,6 +139,14 @@ def _over_time(path, events) -> None:
     plt.close(fig)
 
 
+def _columns(path: Path, names: tuple[str, ...]) -> np.ndarray | None:
+    """The named columns of a run's CSV as rows, or None where the run has no such file."""
+    if not path.exists():
+        return None
+    table = read_table(path, names)
+    return np.column_stack([table[name] for name in names])
+
+
 def _metres(v) -> str:
     return "n/a" if v is None else f"{v:.3f} m"
 
@@ -154,6 +165,11 @@ def write_report(out: Path, run_dir: Path, walls: np.ndarray, threshold: float, 
     _topdown(out / "topdown_tracking.png", walls, gt, tracks, events, robot, title)
     _counts(out / "counts.png", events)
     _over_time(out / "over_time.png", events)
+    write_svg(out / "topdown.svg", tracks=_columns(run_dir / "tracks.csv", TRACK_COLUMNS),
+              groundtruth=_columns(run_dir / "groundtruth.csv", TRACK_COLUMNS),
+              detections=_columns(run_dir / "detections.csv", TRACK_COLUMNS[:5]),
+              robot=np.column_stack([robot["t"], robot["odom_x"], robot["odom_y"]]) if len(robot["frame"]) else None,
+              walls=walls, title=title)
     ignored = int(gt.ignore.sum())
     lines = [
         f"# Tracking report: {title}", "",
@@ -177,6 +193,8 @@ def write_report(out: Path, run_dir: Path, walls: np.ndarray, threshold: float, 
         "![top-down view: ground truth thin grey, tracks coloured by id, ID switches as crosses at the person, "
         "false positives as red dots](topdown_tracking.png)", "",
         "![per-frame counts](counts.png)", "", "![metrics over time](over_time.png)", "",
+        "[topdown.svg](topdown.svg): the run animated, to open in a browser and zoom into (detections as diamonds "
+        "with their id and time, tracks with velocity arrows every second, the robot's odometry in grey).", "",
     ]
     (out / "report.md").write_text("\n".join(lines))
     (out / "tracking.json").write_text(json.dumps({"tracking": tracking, "seed001": seed001}, indent=2) + "\n")

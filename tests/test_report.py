@@ -24,6 +24,8 @@ def test_report_of_a_run(tmp_path, capsys):
         png = (report / name).read_bytes()
         assert png[:8] == PNG_MAGIC and len(png) > 10000
         assert f"]({name})" in text
+    svg = (report / "topdown.svg").read_text()
+    assert svg.startswith("<svg") and "<animateMotion" in svg and "](topdown.svg)" in text
     # a second report into the same place is refused, the first left as it was
     before = (report / "report.md").read_bytes()
     assert main(["report", str(run)]) == 2
