@@ -94,7 +94,15 @@ class GLRenderer:
         self.option.geomgroup[:] = 1  # body parts live in groups 1-3; MuJoCo shows only 0-2 by default
         self.option.geomgroup[TORSO_GROUP:LEG_GROUP + 1] = people
         self.people = people
-        self.range_max = range_max  # people wholly farther than this (z-depth) are not drawn
+        self.range_max = range_max  # nothing wholly farther than this (z-depth) is drawn
+        # the corners of the walls and obstacles (boxes that never move), to leave out those outside the view
+        boxes = np.flatnonzero((m.geom_type == mujoco.mjtGeom.mjGEOM_BOX) & (m.geom_bodyid == 0))
+        d = mujoco.MjData(m)  # the world body's geoms placed (the scene may not have been synced yet)
+        mujoco.mj_kinematics(m, d)
+        unit = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
+        self._walls = boxes
+        self._wall_corners = (d.geom_xpos[boxes][:, None, :] + np.einsum(
+            "nij,nkj->nki", d.geom_xmat[boxes].reshape(-1, 3, 3), unit[None] * m.geom_size[boxes][:, None, :]))
         self.camera = mujoco.MjvCamera()
         self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
         self.ids = mujoco.MjvScene(m, maxgeom=m.ngeom + 100)
@@ -116,6 +124,17 @@ class GLRenderer:
                                mujoco.mjtCatBit.mjCAT_ALL, scene)
         mujoco.mjr_render(self.rect, scene, self.mjr)
 
+    def _frustum(self, camera: str, points: np.ndarray) -> np.ndarray:
+        """Which groups of points [n, k, 3] (world) lie wholly outside one plane of the camera's view (behind it,
+        beyond one side, or, for a depth camera, beyond its range)."""
+        origin, rot = camera_pose(self.scene, camera)
+        c = (points - origin) @ rot
+        k = self.intrinsics
+        tan_x, tan_y = k.width / 2 / k.f, k.height / 2 / k.f
+        x, y, z = c[..., 0], c[..., 1], c[..., 2]
+        return ((z < 0).all(axis=1) | (z > self.range_max).all(axis=1) | (x > z * tan_x).all(axis=1)
+                | (-x > z * tan_x).all(axis=1) | (y > z * tan_y).all(axis=1) | (-y > z * tan_y).all(axis=1))
+
     def _out_of_view(self, camera: str) -> np.ndarray:
         """Geoms of the persons whose bounding sphere lies wholly outside the camera's view or beyond its range
         (where a depth camera measures nothing): drawing costs per geom under Mesa, wherever the geom lands, so
@@ -135,7 +154,8 @@ class GLRenderer:
 
     def render(self, camera: str, depth: bool = True, segmentation: bool = True, rgb: bool = False) -> dict:
         self.context.make_current()
-        hidden = self._out_of_view(camera) if self.people else np.zeros(0, np.int64)
+        hidden = np.concatenate([self._out_of_view(camera) if self.people else np.zeros(0, np.int64),
+                                 self._walls[self._frustum(camera, self._wall_corners)]])
         alpha = self.scene.model.geom_rgba[hidden, 3].copy()
         self.scene.model.geom_rgba[hidden, 3] = 0.0
         try:
@@ -249,8 +269,9 @@ class DepthCamera:
         self.rng = rng
         self.intrinsics = Intrinsics(params["width"], params["height"], params["fovy_deg"])
         self.period = 1.0 / params["rate"]
+        # beyond its range a depth camera measures nothing, so nothing there need be drawn, unless it takes colour
         self.renderer = make_renderer(scene, self.intrinsics, scene.robot_body, params["rgb"],
-                                      range_max=params["range_max"])
+                                      range_max=np.inf if params["rgb"] else params["range_max"])
         self._rays = self.intrinsics.pixel_directions()
 
     @property

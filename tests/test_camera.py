@@ -199,3 +199,22 @@ def test_without_gl_the_cameras_fall_back_to_ray_casting_and_say_so(monkeypatch)
     wall = np.abs(expected_depth(cam) - 4.5) < 1e-9
     np.testing.assert_allclose(frame.depth[wall], 4.5, atol=1e-6)
     assert WallCamera(WALL_CAM, Scene(np.array(WALL_X), 0.425, 1, wall_cameras=[WALL_CAM])).backend == "raycast"
+
+
+def test_walls_out_of_view_are_left_out_without_changing_the_image():
+    # a room with walls all round and inside it; the camera faces +x from its middle: walls behind it and beyond
+    # 8 m are not drawn, and the depth image and segmentation are what they are with every wall drawn
+    walls = [[[-10, -10], [10, -10]], [[10, -10], [10, 10]], [[10, 10], [-10, 10]], [[-10, 10], [-10, -10]],
+             [[-6, -3], [-6, 3]], [[4, 2], [6, 2]], [[3, -1], [3, -4]], [[-2, 6], [2, 6]]]
+    scene, cam = depth_scene(walls, capacity=3)
+    scene.sync(np.zeros(3), np.array([1, 2, 3]), np.array([[2.0, 0.5], [5.0, -1.0], [-3.0, 0.0]]))
+    camera = DepthCamera(cam, scene, np.random.default_rng(0))
+    assert isinstance(camera.renderer, GLRenderer), "no GL context here: the ray-casting renderer culls nothing"
+    renderer = camera.renderer
+    culled = renderer._walls[renderer._frustum(cam["name"], renderer._wall_corners)]
+    assert 0 < len(culled) < len(renderer._walls)
+    culled_frame = camera.capture(0.0)
+    renderer._walls, renderer._wall_corners = renderer._walls[:0], renderer._wall_corners[:0]  # draw every wall
+    full_frame = camera.capture(0.0)
+    np.testing.assert_array_equal(culled_frame.depth, full_frame.depth)
+    np.testing.assert_array_equal(culled_frame.person_id, full_frame.person_id)
