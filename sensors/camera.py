@@ -81,20 +81,34 @@ class GLRenderer:
         self.backend = os.environ.get("MUJOCO_GL", "glfw")
         self.scene = scene
         self.intrinsics = intrinsics
-        m = scene.model
         self.shape = (intrinsics.height, intrinsics.width)
         self.context = mujoco.GLContext(intrinsics.width, intrinsics.height)
-        self.context.make_current()
-        # near and far clipping planes in metres (MuJoCo scales them by the model's extent)
-        m.vis.map.znear, m.vis.map.zfar = NEAR_CLIP / m.stat.extent, FAR_CLIP / m.stat.extent
-        self.mjr = mujoco.MjrContext(m, mujoco.mjtFontScale.mjFONTSCALE_100)
-        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self.mjr)
         self.rect = mujoco.MjrRect(0, 0, intrinsics.width, intrinsics.height)
         self.option = mujoco.MjvOption()
         self.option.geomgroup[:] = 1  # body parts live in groups 1-3; MuJoCo shows only 0-2 by default
         self.option.geomgroup[TORSO_GROUP:LEG_GROUP + 1] = people
         self.people = people
+        self.rgb = rgb
         self.range_max = range_max  # nothing wholly farther than this (z-depth) is drawn
+        self.camera = mujoco.MjvCamera()
+        self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
+        self.mjr = None
+        self._remake()
+        self._seg = np.empty((*self.shape, 3), np.uint8)
+        self._depth = np.empty(self.shape, np.float32)
+
+    def _remake(self) -> None:
+        """The GL context's model data and the scenes to draw, for the scene's current model (it is made anew
+        when more persons come than it holds)."""
+        m = self.scene.model
+        self.version = self.scene.version
+        self.context.make_current()
+        # near and far clipping planes in metres (MuJoCo scales them by the model's extent)
+        m.vis.map.znear, m.vis.map.zfar = NEAR_CLIP / m.stat.extent, FAR_CLIP / m.stat.extent
+        if self.mjr is not None:
+            self.mjr.free()
+        self.mjr = mujoco.MjrContext(m, mujoco.mjtFontScale.mjFONTSCALE_100)
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self.mjr)
         # the corners of the walls and obstacles (boxes that never move), to leave out those outside the view
         boxes = np.flatnonzero((m.geom_type == mujoco.mjtGeom.mjGEOM_BOX) & (m.geom_bodyid == 0))
         d = mujoco.MjData(m)  # the world body's geoms placed (the scene may not have been synced yet)
@@ -103,10 +117,8 @@ class GLRenderer:
         self._walls = boxes
         self._wall_corners = (d.geom_xpos[boxes][:, None, :] + np.einsum(
             "nij,nkj->nki", d.geom_xmat[boxes].reshape(-1, 3, 3), unit[None] * m.geom_size[boxes][:, None, :]))
-        self.camera = mujoco.MjvCamera()
-        self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
         self.ids = mujoco.MjvScene(m, maxgeom=m.ngeom + 100)
-        self.colour = mujoco.MjvScene(m, maxgeom=m.ngeom + 100) if rgb else None
+        self.colour = mujoco.MjvScene(m, maxgeom=m.ngeom + 100) if self.rgb else None
         for sc in (self.ids, self.colour):
             if sc is None:
                 continue
@@ -115,8 +127,17 @@ class GLRenderer:
                 sc.flags[flag] = False
         self.ids.flags[mujoco.mjtRndFlag.mjRND_SEGMENT] = True
         self.ids.flags[mujoco.mjtRndFlag.mjRND_IDCOLOR] = True
-        self._seg = np.empty((*self.shape, 3), np.uint8)
-        self._depth = np.empty(self.shape, np.float32)
+
+    def __del__(self):
+        # GL object names belong to a context: the MjrContext must be freed with its own context current, or it
+        # deletes whatever another renderer's context holds under the same names
+        try:
+            self.context.make_current()
+            if self.mjr is not None:
+                self.mjr.free()
+            self.context.free()
+        except Exception:  # interpreter shutdown: nothing left to free
+            pass
 
     def _draw(self, scene: mujoco.MjvScene, camera: str) -> None:
         self.camera.fixedcamid = self.scene.model.camera(camera).id
@@ -154,6 +175,8 @@ class GLRenderer:
 
     def render(self, camera: str, depth: bool = True, segmentation: bool = True, rgb: bool = False) -> dict:
         self.context.make_current()
+        if self.version != self.scene.version:
+            self._remake()
         hidden = np.concatenate([self._out_of_view(camera) if self.people else np.zeros(0, np.int64),
                                  self._walls[self._frustum(camera, self._wall_corners)]])
         alpha = self.scene.model.geom_rgba[hidden, 3].copy()

@@ -89,24 +89,33 @@ class LaserArray:
 
     def __init__(self, lasers: list[Laser], scene: Scene, threads: int = 2):
         self.lasers, self.scene = lasers, scene
+        self.threads = max(1, threads)
+        self._groups = np.max([laser._groups for laser in lasers], axis=0) if lasers else None
+        self._version = None
         self.batch = None
         try:
             from mujoco import batch
         except ImportError:
             return
-        self.threads = max(1, threads)
-        self.batch = batch.Batch(scene.model, nsim=self.threads, nthread=self.threads)
+        self._make = lambda: batch.Batch(scene.model, nsim=self.threads, nthread=self.threads)
+        self._remake()
+
+    def _remake(self) -> None:
+        """The batch for the scene's current model (it is made anew when more persons come than it holds)."""
+        self.batch = self._make()
+        self._version = self.scene.version
         self._mocap_pos = self.batch.bind("mocap_pos")
         self._mocap_quat = self.batch.bind("mocap_quat")
         # the copies must follow what sync changes in the model: transparency (parked people), sizes and bounds
         self._fields = ("geom_rgba", "geom_size", "geom_pos", "geom_rbound", "geom_aabb")
         self._copies = [self.batch.expand(name) for name in self._fields]
-        self._groups = np.max([laser._groups for laser in lasers], axis=0) if lasers else None
 
     def scan(self, stamp: float, robot_pose: np.ndarray, which: list[int]) -> list[LaserScan]:
         """Scans of the lasers ``which`` (indices) at the scene's current state."""
         if self.batch is None or not which:
             return [self.lasers[k].scan(stamp, robot_pose) for k in which]
+        if self._version != self.scene.version:
+            self._remake()
         origins, vecs = [], []
         for k in which:
             origin, vec = self.lasers[k].rays(robot_pose)

@@ -24,6 +24,9 @@ ROBOT_HEAD_BOTTOM = 1.45  # m
 ROBOT_HEAD_HALF = (0.14, 0.2)  # m, half depth and half width of the head
 ROBOT_HEIGHT = 1.7  # m, top of the head
 PARKED_Z = -50.0
+# person slots the model starts with; it is made anew with twice as many when more persons are alive (up to the
+# crowd's max_agents): MuJoCo's ray casts loop over every geom, so 400 parked slots cost an airport scan about 0.6 ms
+INITIAL_CAPACITY = 32
 PARTS = ("torso", "head", "legs")
 # MuJoCo geom groups, so that a ray cast skips the parts a ray at its height cannot meet (a renderer must turn all
 # groups on: MuJoCo shows groups 0-2 by default)
@@ -88,12 +91,21 @@ class Scene:
     """
 
     def __init__(self, walls: np.ndarray, robot_radius: float, capacity: int, parts=PARTS,
-                 robot_cameras: tuple = (), wall_cameras: tuple = ()):
+                 robot_cameras: tuple = (), wall_cameras: tuple = (), initial_capacity: int = INITIAL_CAPACITY):
         unknown = set(parts) - set(PARTS)
         if unknown:
             raise ValueError(f"unknown body parts {sorted(unknown)}; expected some of {PARTS}")
-        self.capacity = capacity
+        self.max_capacity = capacity
         self.parts = set(parts)
+        self._layout = (np.asarray(walls, float), robot_radius, tuple(robot_cameras), tuple(wall_cameras))
+        self.version = 0  # counts the builds: whoever holds something made from the model remakes it on a change
+        self._build(min(capacity, initial_capacity))
+
+    def _build(self, capacity: int) -> None:
+        """Make the model with ``capacity`` person slots, all parked."""
+        walls, robot_radius, robot_cameras, wall_cameras = self._layout
+        self.capacity = capacity
+        self.version += 1
         persons = "\n".join(_person_xml(k, self.parts) for k in range(capacity))
         cameras = [*robot_cameras, *wall_cameras]
         # a floor as big as the map plus a margin (an infinite plane costs a third of a camera image under Mesa)
@@ -174,8 +186,10 @@ class Scene:
         (``body.body_scale``; the adult body without it).
         """
         n = len(person_ids)
-        if n > self.capacity:
-            raise ValueError(f"{n} persons alive but the scene holds {self.capacity} (crowd.max_agents)")
+        if n > self.max_capacity:
+            raise ValueError(f"{n} persons alive but the scene holds {self.max_capacity} (crowd.max_agents)")
+        if n > self.capacity:  # a bigger model; each slot of it costs every ray cast a little, parked or not
+            self._build(min(self.max_capacity, max(2 * self.capacity, n)))
         m, d = self.model, self.data
         d.mocap_pos[self.robot_mocap] = (robot_pose[0], robot_pose[1], 0.0)
         d.mocap_quat[self.robot_mocap] = (np.cos(robot_pose[2] / 2), 0.0, 0.0, np.sin(robot_pose[2] / 2))

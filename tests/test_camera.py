@@ -218,3 +218,50 @@ def test_walls_out_of_view_are_left_out_without_changing_the_image():
     full_frame = camera.capture(0.0)
     np.testing.assert_array_equal(culled_frame.depth, full_frame.depth)
     np.testing.assert_array_equal(culled_frame.person_id, full_frame.person_id)
+
+
+def test_a_scene_grown_for_more_people_sees_what_a_big_one_does():
+    # the same 50 people in a scene made for all of them and in one that started with 4 slots and grew while its
+    # lasers and cameras were in use: the same scans, depth images and wall-camera frames, bit for bit
+    from sensors.laser import LaserArray
+
+    rng = np.random.default_rng(5)
+    xy = np.column_stack([rng.uniform(1.5, 9.0, 50), rng.uniform(-4.0, 4.0, 50)])
+    vel = rng.normal(0, 1, (50, 2))
+    walked = rng.uniform(0, 10, 50)
+    wall_cam = dict(WALL_CAM, rgb=True)
+    out = []
+    for initial in (60, 4):
+        scene = Scene(np.array(WALL_X) * 3, 0.425, 60, robot_cameras=[DEPTH], wall_cameras=[wall_cam],
+                      initial_capacity=initial)
+        scene.sync(np.zeros(3), np.arange(3), xy[:3], vel[:3], walked[:3])
+        lasers = LaserArray([Laser(validate({"name": "l", "mount": [0, 0, 0], "noise": []}, LASER, "<test>"),
+                                   scene, np.random.default_rng(0))], scene)
+        depth, wall = DepthCamera(DEPTH, scene, np.random.default_rng(0)), WallCamera(wall_cam, scene)
+        before = (lasers.scan(0.0, np.zeros(3), [0])[0].ranges, depth.capture(0.0).depth, wall.capture(0.0).rgb)
+        scene.sync(np.zeros(3), np.arange(50), xy, vel, walked)
+        assert scene.capacity == (60 if initial == 60 else 50)
+        scan = lasers.scan(0.0, np.zeros(3), [0])[0]
+        d, w = depth.capture(0.0), wall.capture(0.0)
+        out.append((before, scan.ranges, scan.person_id, d.depth, d.person_id, w.rgb, w.person_id, w.boxes))
+    for a, b in zip(*out):
+        for x, y in zip(a, b) if isinstance(a, tuple) else [(a, b)]:
+            np.testing.assert_array_equal(x, y)
+
+
+def test_a_renderer_freed_leaves_the_others_images_alone():
+    # freeing a GL renderer must not delete another one's buffers (GL object names are per context): the second
+    # camera's image after the first is gone equals the first camera's
+    import gc
+
+    def camera():
+        scene = Scene(np.array(WALL_X) * 3, 0.425, 2, wall_cameras=[dict(WALL_CAM, rgb=True)])
+        scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1, 2]), np.array([[6.0, 0.5], [8.0, -1.0]]))
+        return WallCamera(dict(WALL_CAM, rgb=True), scene)
+
+    first = camera()
+    image = first.capture(0.0).rgb
+    second = camera()
+    del first
+    gc.collect()
+    np.testing.assert_array_equal(second.capture(0.0).rgb, image)
