@@ -228,8 +228,9 @@ def write_svg(path, *, tracks: np.ndarray, detections: np.ndarray | None = None,
                    f'<text x="{p[0, 0] + 10:.0f}" y="{p[0, 1] - 10:.0f}" fill="{c}" stroke="none">{i:.0f}</text>'
                    f'<text x="{p[-1, 0] + 10:.0f}" y="{p[-1, 1] - 10:.0f}" fill="{c}" stroke="none">{i:.0f}</text></g>')
     shapes, labels = _detections(det, t_lo, t_end, animate)
-    halo = 'fill="#222" stroke="white" stroke-width="0.6" paint-order="stroke"'  # keeps overlapping ones apart
-    out += [f'</g><g id="detections" {halo}>', *shapes, f'</g><g id="detection-labels" {halo} font-size="4">', *labels]
+    # a white outline keeps overlapping diamonds apart; none on the labels: Firefox plays 7 frames/s with it, 32 without
+    out += ['</g><g id="detections" fill="#222" stroke="white" stroke-width="0.6">', *shapes,
+            '</g><g id="detection-labels" fill="#222" font-size="4">', *labels]
     out.append("</g>")
     if animate:
         out.append('<g id="markers" font-size="30" font-weight="bold">')
