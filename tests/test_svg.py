@@ -226,3 +226,16 @@ def test_bad_input_is_refused(tmp_path):
         write_svg(tmp_path / "x.svg", tracks=np.zeros((3, 5)))
     with pytest.raises(ValueError, match="before start"):
         write_svg(tmp_path / "x.svg", tracks=track(1, [0.0], [0.0], [0.0]), start=2.0, end=1.0)
+
+
+def test_what_does_not_move_is_one_layer_apart_from_what_does(tmp_path):
+    tr = track(1, [0.0, 1.0], [0.0, 1.0], [0.0, 0.0])
+    det = np.array([[0, 0.0, 0, 1.0, 1.0]])
+    kw = dict(tracks=tr, groundtruth=tr, detections=det, robot=np.array([[0.0, 0.0, 0.0]]), walls=np.zeros((1, 2, 2)))
+    root = draw(tmp_path, **kw)
+    top = [e.get("id") for e in root][1:]  # after the background
+    assert top == ["map", "detections", "detection-labels", "markers", "clock", "scale", "title"]
+    # Chrome paints a will-change layer once instead of at every step of every marker
+    assert layer(root, "map").get("style") == "will-change:transform"
+    assert [e.get("id") for e in layer(root, "map")] == ["walls", "robot", "groundtruth", "tracks"]
+    assert layer(draw(tmp_path, animate=False, **kw), "map").get("style") is None
