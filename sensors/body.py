@@ -23,6 +23,9 @@ TORSO_BOTTOM, TORSO_TOP = 0.62, 1.45  # m
 HEAD_RADIUS = 0.10  # m
 HEAD_CENTRE = 1.62  # m (top of the head at 1.72 m)
 HEIGHT = HEAD_CENTRE + HEAD_RADIUS
+# the sphere that ends each leg at the hip lies wholly inside the torso, so what sees the body never needs it
+HIP_INSIDE_TORSO = (HIP_HALF_WIDTH + LEG_RADIUS < TORSO_RADIUS
+                    and TORSO_BOTTOM < HIP_HEIGHT - LEG_RADIUS and HIP_HEIGHT + LEG_RADIUS < TORSO_TOP)
 STRIDE = 2 * 0.72  # m walked per gait cycle (two steps)
 # the swing angle at which the feet are a step apart: asin(step / 2 / hip height) = 24.4 degrees
 SWING_AMPLITUDE = float(np.arcsin(0.72 / 2 / HIP_HEIGHT))

@@ -5,7 +5,8 @@ front (the visible fraction's denominator), and the people of a wall camera's im
 costs about 20 microseconds whatever its size on screen, so 75 people of four parts cost 6-7 ms a pass; the rays of
 the pixels they cover cost a fraction of that, and the surfaces are the exact primitives the lasers see.
 
-Each function takes ray origins relative to the primitive and directions ``d`` of any length, and returns the ray
+``cast_part`` casts rays against one part of many persons (the camera keeps the nearest part per pixel). Each
+primitive takes ray origins relative to the primitive and directions ``d`` of any length, and returns the ray
 parameter t of the first surface point o + t d with t >= 0 (inf where the ray misses). Single precision: relative
 to each person, a millimetre is far below a pixel here.
 """
@@ -16,7 +17,7 @@ import numpy as np
 
 from . import body
 
-TORSO, HEAD, LEFT_LEG, RIGHT_LEG = range(4)  # the part index ``cast`` returns
+TORSO, HEAD, LEFT_LEG, RIGHT_LEG = range(4)  # the parts, in the order of ``part_box_corners``
 F = np.float32
 
 
@@ -52,11 +53,12 @@ def ray_sphere(wx, wy, wz, dx, dy, dz, r) -> np.ndarray:
     return np.where((disc >= 0) & (-b + sq >= 0), t, np.inf).astype(F)
 
 
-def ray_capsule(wx, wy, wz, dx, dy, dz, e, r) -> np.ndarray:
+def ray_capsule(wx, wy, wz, dx, dy, dz, e, r, start_cap: bool = True) -> np.ndarray:
     """A capsule of radius r round the segment from the origin to e [n, 3] (ray origin w relative to its start).
 
     The capsule is the union of its side (the infinite cylinder round the segment's line, where the entry point
-    projects onto the segment) and the spheres at the two ends, so its first hit is the nearest of theirs."""
+    projects onto the segment) and the spheres at the two ends, so its first hit is the nearest of theirs.
+    ``start_cap=False`` leaves out the sphere at the start, for a capsule whose start lies inside another body."""
     ex, ey, ez = e[:, 0], e[:, 1], e[:, 2]
     A = dx * dx + dy * dy + dz * dz
     B = dx * ex + dy * ey + dz * ez
@@ -71,38 +73,31 @@ def ray_capsule(wx, wy, wz, dx, dy, dz, e, r) -> np.ndarray:
         t = (-qb - np.sqrt(np.maximum(disc, 0))) / qa
         s = (E + t * B) / C
     side = np.where((disc >= 0) & (qa > 1e-12) & (t >= 0) & (s >= 0) & (s <= 1), t, np.inf).astype(F)
-    return np.minimum(side, np.minimum(ray_sphere(wx, wy, wz, dx, dy, dz, r),
-                                       ray_sphere(wx - ex, wy - ey, wz - ez, dx, dy, dz, r)))
+    side = np.minimum(side, ray_sphere(wx - ex, wy - ey, wz - ez, dx, dy, dz, r))
+    return np.minimum(side, ray_sphere(wx, wy, wz, dx, dy, dz, r)) if start_cap else side
 
 
-def cast(scene, slot: np.ndarray, o: np.ndarray, d: np.ndarray,
-         candidates: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Ray parameters t [n] (inf for a miss) of rays from ``o`` [3] along ``d`` [n, 3] to the body of the person in
-    ``slot[i]`` of the scene, each body at its own size, and the part each ray meets first. ``candidates`` [4, n]:
-    the rays that may meet each part (the rest are not tested against it), from the parts' projected boxes."""
-    n = len(slot)
-    t = np.full((4, n), np.inf, F)
-    for part in range(4):
-        rays = slice(None) if candidates is None else np.flatnonzero(candidates[part])
-        sl = slot[rays]
-        k = scene.person_scale[sl].astype(F)
-        ox, oy, oz = (F(c) for c in o)
-        dx, dy, dz = d[rays].T.astype(F)
-        if part in (TORSO, HEAD):
-            x, y = scene.person_xy[sl].T.astype(F)
-            if part == TORSO:
-                t[part, rays] = ray_vertical_cylinder(ox - x, oy - y, oz, dx, dy, dz, F(body.TORSO_RADIUS) * k,
-                                                      F(body.TORSO_BOTTOM) * k, F(body.TORSO_TOP) * k)
-            else:
-                t[part, rays] = ray_sphere(ox - x, oy - y, oz - F(body.HEAD_CENTRE) * k, dx, dy, dz,
-                                           F(body.HEAD_RADIUS) * k)
-        else:
-            leg = part - LEFT_LEG
-            a, b = scene.hips[sl, leg].astype(F), scene.feet[sl, leg].astype(F)
-            t[part, rays] = ray_capsule(ox - a[:, 0], oy - a[:, 1], oz - a[:, 2], dx, dy, dz, b - a,
-                                        F(body.LEG_RADIUS) * k)
-    part = np.argmin(t, axis=0)
-    return t[part, np.arange(n)], part
+def cast_part(scene, slot: np.ndarray, part: int, o: np.ndarray, owner: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """Ray parameters t [n] (inf for a miss) of rays from ``o`` [3] along ``d`` [n, 3] to one ``part`` of the body
+    of the person in ``slot[owner[i]]`` of the scene, each body at its own size. What depends on the person alone
+    is worked out once per person, the rest per ray."""
+    k = scene.person_scale[slot].astype(F)
+    ox, oy, oz = (F(c) for c in o)
+    dx, dy, dz = d.T.astype(F)
+    if part == TORSO:
+        x, y = scene.person_xy[slot].T.astype(F)
+        return ray_vertical_cylinder((ox - x)[owner], (oy - y)[owner], oz, dx, dy, dz,
+                                     (F(body.TORSO_RADIUS) * k)[owner], (F(body.TORSO_BOTTOM) * k)[owner],
+                                     (F(body.TORSO_TOP) * k)[owner])
+    if part == HEAD:
+        x, y = scene.person_xy[slot].T.astype(F)
+        return ray_sphere((ox - x)[owner], (oy - y)[owner], (oz - F(body.HEAD_CENTRE) * k)[owner], dx, dy, dz,
+                          (F(body.HEAD_RADIUS) * k)[owner])
+    leg = part - LEFT_LEG
+    a, b = scene.hips[slot, leg].astype(F), scene.feet[slot, leg].astype(F)
+    # where the hip's end of the leg lies inside the torso, a ray meets the torso before it
+    return ray_capsule((ox - a[:, 0])[owner], (oy - a[:, 1])[owner], (oz - a[:, 2])[owner], dx, dy, dz,
+                       (b - a)[owner], (F(body.LEG_RADIUS) * k)[owner], start_cap=not body.HIP_INSIDE_TORSO)
 
 
 PART_CORNERS = (slice(0, 8), slice(8, 16), slice(16, 24), slice(24, 32))  # of part_box_corners, by part
@@ -138,10 +133,10 @@ def normals(scene, slot: np.ndarray, part: np.ndarray, points: np.ndarray) -> np
         sel = np.flatnonzero(part == p)
         a = scene.hips[slot[sel], leg]
         e = scene.feet[slot[sel], leg] - a
-        s = np.clip(((points[sel] - a) * e).sum(axis=1) / (e * e).sum(axis=1), 0, 1)
+        s = np.clip(np.einsum("ij,ij->i", points[sel] - a, e) / np.einsum("ij,ij->i", e, e), 0, 1)
         axis[sel] = a + s[:, None] * e
     n = points - axis
-    length = np.sqrt((n * n).sum(axis=1))
+    length = np.sqrt(np.einsum("ij,ij->i", n, n))
     cap = (part == TORSO) & (length < 0.98 * body.TORSO_RADIUS * k)
     n[cap] = 0.0
     n[cap, 2] = np.sign(points[cap, 2] - (body.TORSO_BOTTOM + body.TORSO_TOP) / 2 * k[cap])
@@ -150,7 +145,7 @@ def normals(scene, slot: np.ndarray, part: np.ndarray, points: np.ndarray) -> np
 
 
 def colours(person_ids: np.ndarray) -> np.ndarray:
-    """RGB [n, 4, 3] in [0, 1] of each person's parts in ``cast``'s order: their top, skin, and trousers twice
+    """RGB [n, 4, 3] in [0, 1] of each person's parts in the parts' order: their top, skin, and trousers twice
     (sensors/body.py)."""
     top, trousers = body.clothing(person_ids)
     return np.stack([top, np.broadcast_to(body.SKIN, top.shape), trousers, trousers], 1)

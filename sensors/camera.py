@@ -399,42 +399,65 @@ class WallCamera:
 
 def person_pixels(scene: Scene, camera: str, intrinsics: Intrinsics, slots: np.ndarray):
     """Every pixel of each person's silhouette as it would show with nobody and nothing in front and no image
-    border: each pixel of the person's projected bounding box ray-cast against that person's own body.
+    border: each part of the body ray-cast on the pixels of its projected bounding box, the nearest part kept.
 
     Returns the hits as ``owner`` (index into ``slots``), ``u``, ``v``, z-depth, body part, and the weight each
     stands for: pixels inside the image are all cast; beyond its border (within one image size, which bounds the
-    work for someone right in front of the lens) every other row and column, each counting four.
+    work for someone right in front of the lens) every other row and column, each counting four. The hits come
+    by owner, then row by row.
     """
     k = intrinsics
     origin, rot = camera_pose(scene, camera)
     slots = np.asarray(slots, np.int64)
-    # each person's bounding box projected: the pixels to cast
     corners = bodycast.part_box_corners(scene, slots)
     cam = (corners - origin) @ rot
     in_front = (cam[..., 2] > 1e-3).all(axis=1)
-    uv = k.project(np.where(in_front[:, None, None], cam, 1.0).reshape(-1, 3)).reshape(cam.shape[:2] + (2,))
-    lo = np.maximum(np.floor(uv.min(axis=1)).astype(np.int64), [-k.width, -k.height])
-    hi = np.minimum(np.ceil(uv.max(axis=1)).astype(np.int64), [2 * k.width, 2 * k.height])
-    in_image = (hi > 0).all(axis=1) & (lo < [k.width, k.height]).all(axis=1)
-    size = np.where((in_front & in_image)[:, None], np.maximum(hi - lo, 0), 0)
-    count = size[:, 0] * size[:, 1]
-    owner = np.repeat(np.arange(len(slots)), count)
-    local = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
-    u = lo[owner, 0] + local % np.maximum(size[owner, 0], 1)
-    v = lo[owner, 1] + local // np.maximum(size[owner, 0], 1)
+    uv = k.project(np.where(in_front[:, None, None], cam, 1.0).reshape(-1, 3)).reshape(len(slots), 4, 8, 2)
+    reach_lo, reach_hi = [-k.width, -k.height], [2 * k.width, 2 * k.height]
+    part_lo = np.clip(np.floor(uv.min(axis=2)), reach_lo, reach_hi).astype(np.int64)  # [n, 4 parts, 2]
+    part_hi = np.clip(np.ceil(uv.max(axis=2)), reach_lo, reach_hi).astype(np.int64)
+    lo, hi = part_lo.min(axis=1), part_hi.max(axis=1)  # the person's box
+    cast = in_front & (hi > 0).all(axis=1) & (lo < [k.width, k.height]).all(axis=1)
+    # the nearest part at each pixel of each person's box, the boxes one after another
+    width = np.where(cast, hi[:, 0] - lo[:, 0], 0)
+    area = width * np.where(cast, hi[:, 1] - lo[:, 1], 0)
+    end = np.cumsum(area)
+    start = end - area
+    nearest = np.full(end[-1] if len(end) else 0, np.inf, np.float32)
+    nearest_part = np.zeros(len(nearest), np.int8)
+    for part in range(4):
+        owner, u, v = _box_pixels(k, part_lo[:, part], part_hi[:, part], cast)
+        rays = (k.rays(u, v) @ rot.T).astype(np.float32)  # optical z = 1: the ray parameter t is the z-depth
+        t = bodycast.cast_part(scene, slots, part, origin, owner, rays)
+        hit = np.flatnonzero(t < np.inf)
+        owner, t = owner[hit], t[hit]
+        at = start[owner] + (v[hit] - lo[owner, 1]) * width[owner] + u[hit] - lo[owner, 0]
+        nearer = t < nearest[at]
+        nearest[at[nearer]] = t[nearer]
+        nearest_part[at[nearer]] = part
+    at = np.flatnonzero(nearest < np.inf)
+    owner = np.searchsorted(end, at, side="right")
+    local = at - start[owner]
+    u, v = lo[owner, 0] + local % width[owner], lo[owner, 1] + local // width[owner]
     inside = (u >= 0) & (u < k.width) & (v >= 0) & (v < k.height)
-    keep = inside | ((u % 2 == 0) & (v % 2 == 0))
-    owner, u, v, inside = owner[keep], u[keep], v[keep], inside[keep]
-    # each part is tested only on the pixels of its own projected box
-    part_lo = np.stack([np.floor(uv[:, c].min(axis=1)) for c in bodycast.PART_CORNERS], 1)  # [n, 4 parts, 2]
-    part_hi = np.stack([np.ceil(uv[:, c].max(axis=1)) for c in bodycast.PART_CORNERS], 1)
-    plo, phi = part_lo[owner], part_hi[owner]
-    candidates = ((u[:, None] >= plo[..., 0]) & (u[:, None] < phi[..., 0]) & (v[:, None] >= plo[..., 1])
-                  & (v[:, None] < phi[..., 1])).T
-    rays = (k.rays(u, v) @ rot.T).astype(np.float32)  # optical z = 1: the ray parameter t is the z-depth
-    z, part = bodycast.cast(scene, slots[owner], origin, rays, candidates)
-    hit = np.isfinite(z)
-    return owner[hit], u[hit], v[hit], z[hit], part[hit], np.where(inside[hit], 1.0, 4.0)
+    return owner, u, v, nearest[at], nearest_part[at].astype(np.int64), np.where(inside, 1.0, 4.0)
+
+
+def _box_pixels(k: Intrinsics, lo: np.ndarray, hi: np.ndarray, cast: np.ndarray):
+    """The pixels (owner, u, v) of boxes [lo, hi) [n, 2] of the owners ``cast``: all of those in the image, every
+    other row and column of those outside it."""
+    lo = lo.astype(np.int32)  # (32-bit division is the cost here)
+    size = np.where(cast[:, None], np.maximum(hi.astype(np.int32) - lo, 0), 0)
+    count = size[:, 0] * size[:, 1]
+    owner = np.repeat(np.arange(len(lo), dtype=np.int32), count)
+    local = np.arange(count.sum(), dtype=np.int32) - np.repeat(np.cumsum(count, dtype=np.int32) - count, count)
+    row, column = np.divmod(local, size[owner, 0])
+    u, v = lo[owner, 0] + column, lo[owner, 1] + row
+    crosses = cast & ((lo < 0) | (hi > [k.width, k.height])).any(axis=1)
+    if not crosses.any():
+        return owner, u, v
+    keep = ~crosses[owner] | ((u >= 0) & (u < k.width) & (v >= 0) & (v < k.height)) | ((u % 2 == 0) & (v % 2 == 0))
+    return owner[keep], u[keep], v[keep]
 
 
 def person_boxes(scene: Scene, camera: str, intrinsics: Intrinsics, seg: np.ndarray):

@@ -84,3 +84,23 @@ def test_normals_of_each_part():
     n = bodycast.normals(scene, np.zeros(5, np.int64), part, points)
     # side: +x; flat top: +z; head: -y; the left leg's back: -x; the right foot's tip, below the axis's end: -z
     np.testing.assert_allclose(n, [[1, 0, 0], [0, 0, 1], [0, -1, 0], [-1, 0, 0], [0, 0, -1]], atol=1e-9)
+
+
+def test_the_hip_end_of_a_leg_lies_inside_the_torso():
+    # rays from all round a person (one with a leg swung fully forward) aimed at points of the sphere that ends each
+    # leg at the hip meet the torso no later: leaving that sphere out of the leg's cast changes no image
+    assert body.HIP_INSIDE_TORSO
+    scene = Scene(np.zeros((0, 2, 2)), 0.425, 1)
+    scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1]), np.array([[0.0, 0.0]]), np.array([[1.0, 0.0]]),
+               np.array([body.STRIDE / 4]))
+    rng = np.random.default_rng(3)
+    hip = scene.hips[0, rng.integers(0, 2, 500)]
+    target = hip + body.LEG_RADIUS * rng.uniform(-1, 1, (500, 3)) / np.sqrt(3)
+    origin = np.column_stack([rng.uniform(-5, 5, (500, 2)), rng.uniform(0.0, 3.0, 500)])
+    origin[:, :2] *= 1 + 1 / np.linalg.norm(origin[:, :2], axis=1)[:, None]  # at least 1 m from the axis
+    d = (target - origin).astype(F)
+    w = (origin - hip).astype(F)
+    t_hip = bodycast.ray_sphere(*w.T, *d.T, F(body.LEG_RADIUS))
+    t_torso = bodycast.ray_vertical_cylinder(*origin.T.astype(F), *d.T, F(body.TORSO_RADIUS), F(body.TORSO_BOTTOM),
+                                             F(body.TORSO_TOP))
+    assert np.isfinite(t_hip).all() and (t_torso <= t_hip).all()
