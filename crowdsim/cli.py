@@ -17,7 +17,7 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 def _cmd_run(args) -> int:
     from scenarios import load_scenario
 
-    from .run import check_out_dir, run, summary_table
+    from .run import cameras_line, check_out_dir, run, summary_table
 
     scenario = load_scenario(args.scenario, seed=args.seed, duration=args.duration)
     out = Path(args.out) if args.out else Path("runs") / f"{scenario['name']}-{time.strftime('%Y%m%d-%H%M%S')}"
@@ -27,6 +27,8 @@ def _cmd_run(args) -> int:
     gt = metrics["groundtruth"]
     print(f"persons within range: {gt['mean_persons_in_range']:.1f} mean, {gt['max_persons_in_range']} max; "
           f"results in {out}/")
+    if metrics["cameras"]:
+        print(cameras_line(metrics))
     return 0
 
 

@@ -94,6 +94,15 @@ def summary_table(metrics: dict) -> str:
                                                 "real-time factor": f"{tm['realtime_factor']:.2f}x"})
 
 
+def cameras_line(metrics: dict, before: str = "") -> str:
+    """Which renderer drew the cameras, as a sentence ("" for a run without cameras)."""
+    by_renderer = {}
+    for name, backend in metrics["cameras"].items():
+        by_renderer.setdefault(backend, []).append(name)
+    return "".join(f"{before}Cameras rendered by {backend}: {', '.join(names)}."
+                   for backend, names in by_renderer.items())
+
+
 def write_directory(out: Path, write):
     """Call ``write(tmp)`` to fill a fresh temporary directory beside ``out`` and move it into place only when
     complete: a failure leaves nothing half-written, and an existing non-empty ``out`` is never touched.
@@ -180,6 +189,8 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         "tracking": tracking,
         "groundtruth": {"mean_persons_in_range": float(np.mean(counts)) if counts else 0.0,
                         "max_persons_in_range": int(max(counts)) if counts else 0},
+        # which renderer drew each camera: egl or osmesa (MuJoCo's OpenGL), or raycast where no GL context was had
+        "cameras": {camera.name: camera.backend for camera in (*sim.depth_cameras, *sim.wall_cameras)},
         "timing": {
             "wall_s": timing.wall_s,
             "realtime_factor": duration / timing.wall_s if timing.wall_s > 0 else float("inf"),
@@ -195,7 +206,8 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         f"# {scenario['name']} (seed {scenario['seed']}, {duration:g} s)\n\n{table}\n\n"
         f"Persons within {scenario['evaluation']['max_range']:g} m of the robot: "
         f"{metrics['groundtruth']['mean_persons_in_range']:.1f} on average, "
-        f"{metrics['groundtruth']['max_persons_in_range']} at most.\n\n![top-down view](topdown.png)\n")
+        f"{metrics['groundtruth']['max_persons_in_range']} at most.{cameras_line(metrics, ' ')}\n\n"
+        "![top-down view](topdown.png)\n")
     plot_run(tmp / "topdown.png", wall_segments(scenario), np.concatenate(gt_rows) if gt_rows else np.zeros((0, 7)),
              np.concatenate(track_rows) if track_rows else np.zeros((0, 7)), np.array(robot_path),
              np.array(odom), np.concatenate(crowd) if crowd else np.zeros((0, 3)),

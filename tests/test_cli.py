@@ -184,6 +184,7 @@ def test_short_run_writes_a_complete_run_directory(tmp_path, capsys):
     assert {"wall_s", "realtime_factor", "tracker_hz"} <= set(metrics["timing"])
     assert metrics["scenario"] == "tiny_room" and metrics["seed"] == 3 and metrics["duration_s"] == 2.0
     assert metrics["frames"] == 50  # 2 s of two 25 Hz lasers scanning together
+    assert metrics["cameras"] == {} and "Cameras" not in captured.out
     assert metrics["tracking"]["gt"] > 0
 
     for name, header in (("groundtruth.csv", GT_HEADER), ("tracks.csv", CSV_HEADER)):
@@ -220,6 +221,29 @@ def test_short_run_with_rrd_writes_a_recording(tmp_path, capsys):
     assert rrd.is_file() and rrd.stat().st_size > 0
     assert json.loads((out / "metrics.json").read_text())["duration_s"] == 1.0
     assert listing(tmp_path) == {"tiny.yaml", "out"}
+
+
+@pytest.mark.parametrize("gl", ["as chosen", "disable"])
+def test_a_camera_run_says_which_renderer_drew_the_cameras(gl, tmp_path, monkeypatch, capsys):
+    scenario = tmp_path / "cams.yaml"
+    scenario.write_text(TINY + """\
+  depth_cameras:
+    - {name: front_depth, preset: kinect_160}
+  wall_cameras:
+    - {name: corner_cam, position: [0.3, 0.3, 2.8], yaw: 0.6, pitch: 0.45}
+""")
+    import sensors  # noqa: F401 (it chooses MuJoCo's GL backend: egl, else osmesa)
+
+    backend = os.environ["MUJOCO_GL"]
+    if gl == "disable":  # no GL context: the cameras fall back to ray casting
+        monkeypatch.setenv("MUJOCO_GL", gl)
+        backend = "raycast"
+    assert main(["run", str(scenario), "--out", str(tmp_path / "out"), "--quiet", "--duration", "0.2"]) == 0
+    line = f"Cameras rendered by {backend}: front_depth, corner_cam."
+    assert line in capsys.readouterr().out.splitlines()
+    assert json.loads((tmp_path / "out" / "metrics.json").read_text())["cameras"] == {"front_depth": backend,
+                                                                                      "corner_cam": backend}
+    assert line in (tmp_path / "out" / "summary.md").read_text()
 
 
 def test_run_into_an_existing_empty_dir_is_allowed(tmp_path, capsys):
