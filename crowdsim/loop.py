@@ -110,10 +110,11 @@ class Simulation:
         self._next_wall = np.zeros(len(self.wall_cameras))
         self._pending_depth: list[DepthFrame] = []
         self._pending_camera: list[CameraFrame] = []
-        self._latest_fraction: dict[str, tuple[np.ndarray, np.ndarray]] = {}  # camera -> (ids, visible fractions)
+        # sensor -> (ids, amount) of its latest frame: beams per person for a laser, visible share for a camera
+        self._latest_seen: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self._latest_scan: dict[str, LaserScan] = {}
         self._fused_ids = 0
         self._frame = 0
-        self._last_scans: list[LaserScan] = []
 
     def warm_up(self) -> None:
         """Crowd-only simulation for the scenario's warm-up, with the robot standing at its start."""
@@ -127,7 +128,10 @@ class Simulation:
     def _front_clearance(self) -> float:
         """Distance to the nearest laser return in the robot's path (a corridor as wide as the robot)."""
         best = np.inf
-        for laser, scan in zip(self.lasers, self._last_scans):
+        for laser in self.lasers:
+            scan = self._latest_scan.get(laser.name)
+            if scan is None:
+                continue
             pts = transform_points(laser.mount, scan.points())
             ahead = (pts[:, 0] > 0) & (np.abs(pts[:, 1]) < self.robot.p["radius"] + 0.1)
             if ahead.any():
@@ -194,8 +198,9 @@ class Simulation:
             self._next_scan[k] += self.lasers[k].period
             odom_T_laser = self.lasers[k].pose_in(self.robot.odom_pose)
             batches.append(to_frame(self.detectors[k].detect(scan), odom_T_laser, TRACKING_FRAME))
-        if len(due) == len(self.lasers):
-            self._last_scans = scans
+        for scan in scans:
+            self._latest_scan[scan.frame] = scan
+            self._latest_seen[scan.frame] = np.unique(scan.person_id[scan.person_id >= 0], return_counts=True)
         t2 = time.perf_counter()
         self.timing.sensors_s += t2 - t1
         detections = fuse(batches, self.scenario["pipeline"]["fusion_distance"], self._fused_ids)
@@ -205,7 +210,7 @@ class Simulation:
         self.timing.tracker_s += time.perf_counter() - t3
         self.timing.tracker_cycles += 1
         gt, near = self._groundtruth(agents)
-        visibility = self._visibility(agents, scans)
+        visibility = self._visibility(agents)
         tags = self._tags(agents, near, scans, visibility)
         score = self.clearmot.update(gt.track_id, gt.position, tracks.track_id, tracks.position, tags.ignore)
         frame = Frame(self._frame, stamp, self.robot.pose.copy(), self.robot.world_T_odom, agents, scans,
@@ -220,26 +225,28 @@ class Simulation:
             self._next_depth[k] += self.depth_cameras[k].period
             image = self.depth_cameras[k].capture(stamp)
             self._pending_depth.append(image)
-            self._latest_fraction[image.frame] = self.depth_cameras[k].visibility(image)
+            self._latest_seen[image.frame] = self.depth_cameras[k].visibility(image)
         for k in wall_due:
             self._next_wall[k] += self.wall_cameras[k].period
             image = self.wall_cameras[k].capture(stamp)
             self._pending_camera.append(image)
-            self._latest_fraction[image.frame] = (image.ids, image.visible_fraction)
+            self._latest_seen[image.frame] = (image.ids, image.visible_fraction)
 
-    def _visibility(self, agents: AgentStates, scans: list[LaserScan]) -> Visibility:
-        """Per person and sensor: the laser beams that hit them, or the cameras' latest visible share, and whether
-        they were within the sensor's field of view."""
+    def _visibility(self, agents: AgentStates) -> Visibility:
+        """Per person and sensor: what the sensor's latest frame saw of them (laser beams that hit them, a camera's
+        visible share; NaN before its first frame), and whether they are within its field of view."""
         n = len(agents.id)
         names = [laser.name for laser in self.lasers] + [c.name for c in self.depth_cameras + self.wall_cameras]
-        amount = np.zeros((n, len(names)))
+        amount = np.full((n, len(names)), np.nan)
         in_view = np.zeros((n, len(names)), bool)
-        by_name = {scan.frame: scan for scan in scans}
+        for k, name in enumerate(names):
+            if name in self._latest_seen:
+                ids, seen = self._latest_seen[name]
+                amount[:, k] = 0.0
+                rows = np.searchsorted(agents.id, ids)  # those who have left since are dropped
+                keep = (rows < n) & (agents.id[np.minimum(rows, n - 1)] == ids)
+                amount[rows[keep], k] = seen[keep]
         for k, laser in enumerate(self.lasers):
-            scan = by_name.get(laser.name)
-            if scan is not None:
-                hit = scan.person_id[scan.person_id >= 0]
-                amount[:, k] = np.bincount(np.searchsorted(agents.id, hit), minlength=n)[:n]
             pose = laser.pose_in(self.robot.pose)
             rel = agents.position - pose[:2]
             bearing = np.arctan2(rel[:, 1], rel[:, 0]) - pose[2]
@@ -248,13 +255,6 @@ class Simulation:
                 np.abs(np.arctan2(np.sin(bearing), np.cos(bearing))) <= half)
         for j, camera in enumerate(self.depth_cameras + self.wall_cameras):
             k = len(self.lasers) + j
-            ids, share = self._latest_fraction.get(camera.name, (None, None))
-            if ids is None:
-                amount[:, k] = np.nan
-            else:
-                rows = np.searchsorted(agents.id, ids)
-                keep = (rows < n) & (agents.id[np.minimum(rows, n - 1)] == ids)
-                amount[rows[keep], k] = share[keep]
             origin, rot = camera_pose(self.camera_scene, camera.name)
             centre = np.column_stack([agents.position, np.full(n, 1.0)])  # the body's middle
             cam = (centre - origin) @ rot

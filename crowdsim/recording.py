@@ -63,10 +63,10 @@ class Recording:
                           + [compose(pose, m) for m in self.depth_mounts]).reshape(-1, 3)
         rec.log("world/robot/sensors", rr.Arrows2D(**_axes(mounts, 0.3), colors=[200, 100, 0],
                                                    labels=self.sensor_names))
-        points = []
-        for laser, scan in zip(self.lasers, frame.scans):
+        points, by_name = [], {laser.name: laser for laser in self.lasers}
+        for scan in frame.scans:  # the lasers that scanned at this cycle (those of other rates wait for theirs)
             p = scan.points()
-            points.append(transform_points(laser.pose_in(pose), p[np.isfinite(p[:, 0])]))
+            points.append(transform_points(by_name[scan.frame].pose_in(pose), p[np.isfinite(p[:, 0])]))
         if points:
             rec.log("world/laser_points", rr.Points2D(np.concatenate(points), radii=0.03, colors=[230, 60, 60]))
         w = frame.world_T_odom

@@ -80,9 +80,10 @@ class CameraFrame:
 class Visibility:
     """Who each sensor could see at one tracking cycle (simulation-only ground truth, one row per person alive).
 
-    ``amount`` [n, k]: for a laser the number of its beams that hit the person, for a camera the visible fraction
-    of the person in its latest image (NaN before its first). ``in_view`` [n, k]: within the sensor's field of view
-    and range, so a person in view whom the sensor does not see is ``occluded``.
+    ``amount`` [n, k]: what the sensor's latest frame saw of the person (NaN before its first frame): for a laser
+    the number of its beams that hit them, for a camera their visible fraction. ``in_view`` [n, k]: within the
+    sensor's field of view and range, so a person in view whom the sensor's latest frame did not show is
+    ``occluded`` (not before its first frame: that is not known).
     """
 
     ids: np.ndarray
@@ -92,7 +93,7 @@ class Visibility:
 
     @property
     def occluded(self) -> np.ndarray:
-        return self.in_view & ~(self.amount > 0)
+        return self.in_view & (self.amount == 0)
 
     def of(self, sensor: str) -> np.ndarray:
         return self.amount[:, self.sensors.index(sensor)]

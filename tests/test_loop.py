@@ -177,3 +177,24 @@ def test_the_recording_holds_the_camera_images_boxes_and_the_robots_frames(tmp_p
                    "/cameras/corner_cam/rgb/people", "/world/laser_points", "/world/tracks", "/world/robot/base_link",
                    "/world/robot/sensors", "/world/wall_cameras", "/world/odom"):
         assert entity in listing, entity
+
+
+def test_lasers_at_different_rates_keep_their_latest_scan():
+    # a front laser at 12.5 Hz and a rear one at 25 Hz: the front one scans every other cycle; between its scans
+    # its visibility is its latest scan's, not "everyone in view occluded"
+    sc = camera_room()
+    sc["sensors"]["depth_cameras"], sc["sensors"]["wall_cameras"] = [], []
+    sc["sensors"]["lasers"][0]["rate"] = 12.5
+    sim = Simulation(sc)
+    sim.warm_up()
+    frames = list(sim.frames(0.4))
+    # both due at the end of the warm-up (3 s), scanned at the first tick after it; then the front every 0.08 s
+    assert [[s.frame for s in f.scans] for f in frames] == [["front_laser", "rear_laser"]] * 2 + [
+        ["rear_laser"], ["front_laser", "rear_laser"]] * 4
+    for previous, f in zip(frames, frames[1:]):
+        front = next(s for s in (f.scans if len(f.scans) == 2 else previous.scans) if s.frame == "front_laser")
+        beams = np.array([(front.person_id == i).sum() for i in f.visibility.ids])
+        assert beams.sum() > 0  # the robot faces the walkers and the standing group
+        np.testing.assert_array_equal(f.visibility.of("front_laser"), beams)
+        k = f.visibility.sensors.index("front_laser")
+        np.testing.assert_array_equal(f.visibility.occluded[:, k], f.visibility.in_view[:, k] & (beams == 0))
