@@ -20,7 +20,7 @@ class SegmentDetector:
     def segments(self, scan: LaserScan) -> tuple[np.ndarray, np.ndarray]:
         """Per valid return, its segment label; and the valid returns' points [k, 2] (sensor frame)."""
         pts = scan.points()
-        valid = np.isfinite(scan.ranges)
+        valid = scan.returned
         idx = np.flatnonzero(valid)
         p = pts[idx]
         if len(p) == 0:

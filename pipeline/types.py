@@ -18,8 +18,10 @@ UNKNOWN_VARIANCE = 1e6
 class LaserScan:
     """One sweep of a 2D laser, ranges in the sensor frame (x forward, angles counter-clockwise).
 
-    ``ranges`` holds NaN where the beam returned nothing within ``range_max``. ``person_id`` is the ground-truth id
-    of the person each beam hit (-1 for none); it is simulation-only and detectors must not read it.
+    A beam that returned nothing reads NaN, or ``range_max`` where the laser is configured so (``no_return``, as
+    many drivers report it); ``returned`` tells them apart either way, as in ROS, where a range must lie below
+    range_max to count. ``person_id`` is the ground-truth id of the person each beam hit (-1 for none); it is
+    simulation-only and detectors must not read it.
     """
 
     stamp: float
@@ -34,10 +36,16 @@ class LaserScan:
     def angles(self) -> np.ndarray:
         return self.angle_min + self.angle_increment * np.arange(self.ranges.size)
 
+    @property
+    def returned(self) -> np.ndarray:
+        """The beams [n] that measured something."""
+        return np.isfinite(self.ranges) & (self.ranges < self.range_max)
+
     def points(self) -> np.ndarray:
         """Beam endpoints [n, 2] in the sensor frame (NaN rows for no return)."""
         a = self.angles
-        return np.stack([self.ranges * np.cos(a), self.ranges * np.sin(a)], axis=1)
+        r = np.where(self.returned, self.ranges, np.nan)
+        return np.stack([r * np.cos(a), r * np.sin(a)], axis=1)
 
 
 @dataclass

@@ -160,19 +160,21 @@ LASER = Schema({
     "resolution_deg": F("float", 0.5, min=0.0, exclusive_min=True, doc="deg between beams (SICK LMS500)"),
     "range_min": F("float", 0.0, min=0.0, doc="m, nearer returns are no-returns"),
     "range_max": F("float", 20.0, min=0.0, exclusive_min=True, doc="m (seed 000: detections up to 20 m)"),
-    "rate": F("float", 25.0, min=0.0, exclusive_min=True, doc="Hz (SICK LMS500: 25 or 50 Hz)"),
+    "rate": F("float", 25.0, min=0.0, exclusive_min=True,
+              doc="Hz (SICK LMS500: 25 or 50 Hz), at most the simulation's steps per second (1 / dt)"),
     "noise": F(ListOf(F(NOISE_BAND)), LASER_PRESETS["sick_lms500"]["noise"],
                doc="range error bands, nearest first; beyond the last, the last applies (SICK LMS5xx HR)"),
     "no_return": F("str", "nan", choices=("nan", "range_max"),
                    doc="what a beam without a return reads: NaN, or range_max as many drivers report"),
 }, presets=LASER_PRESETS)
 
-# Kinect-like RGB-D cameras (Microsoft Kinect / Asus Xtion: 640 x 480 at 30 Hz, 43 degrees vertical field of view,
-# about 0.5-8 m; Khoshelham & Elberink 2012); the 160 x 120 variant is the same camera at a quarter resolution
+# Kinect-like RGB-D cameras (Microsoft Kinect / Asus Xtion: 640 x 480 at up to 30 Hz, 43 degrees vertical field of
+# view, about 0.5-8 m; Khoshelham & Elberink 2012); the 160 x 120 variant is the same camera at a quarter resolution.
+# The rate is the scenario's to choose (15 Hz unless given): 30 Hz would need a simulation step of 1/30 s or less
 DEPTH_CAMERA_PRESETS = {
-    "kinect_640": {"width": 640, "height": 480, "fovy_deg": 43.0, "range_min": 0.5, "range_max": 8.0, "rate": 30.0,
+    "kinect_640": {"width": 640, "height": 480, "fovy_deg": 43.0, "range_min": 0.5, "range_max": 8.0,
                    "noise": "kinect"},
-    "kinect_160": {"width": 160, "height": 120, "fovy_deg": 43.0, "range_min": 0.5, "range_max": 8.0, "rate": 30.0,
+    "kinect_160": {"width": 160, "height": 120, "fovy_deg": 43.0, "range_min": 0.5, "range_max": 8.0,
                    "noise": "kinect"},
 }
 
@@ -189,7 +191,7 @@ DEPTH_CAMERA = Schema({
     "fovy_deg": F("float", 43.0, min=1.0, max=170.0, doc="deg, vertical field of view (Kinect: 43)"),
     "range_min": F("float", 0.5, min=0.0, doc="m, nearer depths read NaN (Kinect: 0.5)"),
     "range_max": F("float", 8.0, min=0.0, exclusive_min=True, doc="m, farther depths read NaN (Kinect: ~8)"),
-    "rate": F("float", 15.0, min=0.0, exclusive_min=True, doc="Hz"),
+    "rate": F("float", 15.0, min=0.0, exclusive_min=True, doc="Hz, at most 1 / dt"),
     "noise": F("str", "kinect", choices=("kinect", "none"),
                doc="kinect: sigma 1.425e-3 z^2 and 1/8-pixel disparity steps (Khoshelham & Elberink 2012)"),
     "rgb": F("bool", False, doc="render a colour image too (a second pass)"),
@@ -203,7 +205,7 @@ WALL_CAMERA = Schema({
     "width": F("int", 320, min=8, max=4096, doc="pixels (seed 001: flea2 cameras, up to 640 x 480)"),
     "height": F("int", 240, min=8, max=4096, doc="pixels"),
     "fovy_deg": F("float", 45.0, min=1.0, max=170.0, doc="deg, vertical field of view"),
-    "rate": F("float", 10.0, min=0.0, exclusive_min=True, doc="Hz"),
+    "rate": F("float", 10.0, min=0.0, exclusive_min=True, doc="Hz, at most 1 / dt"),
     "rgb": F("bool", True, doc="render a colour image (the segmentation and boxes come without it)"),
 })
 

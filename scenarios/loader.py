@@ -97,6 +97,25 @@ def scenario_from_dict(raw: dict, source: str = "<scenario>") -> dict:
     return scenario
 
 
+def check_sensor(sensor: dict, key: str, dt: float, source: str) -> None:
+    """A sensor's rate within the simulation's steps (a sensor is due at most once a step), its range limits in
+    order, its noise bands nearest first."""
+    if sensor["rate"] * dt > 1 + 1e-9:
+        raise ScenarioError(source, f"{key}.rate",
+                            f"{sensor['rate']:g} Hz is more than the simulation's {1 / dt:g} steps per second (dt "
+                            f"{dt:g} s) can run; expected at most {1 / dt:g} Hz, or a dt of at most "
+                            f"{1 / sensor['rate']:g} s")
+    if "range_min" in sensor and sensor["range_min"] >= sensor["range_max"]:
+        raise ScenarioError(source, f"{key}.range_min",
+                            f"{sensor['range_min']:g} m; expected less than range_max ({sensor['range_max']:g} m)")
+    bands = [band["up_to"] for band in sensor["noise"]] if isinstance(sensor.get("noise"), list) else []  # lasers
+    for j in range(1, len(bands)):
+        if bands[j] <= bands[j - 1]:
+            raise ScenarioError(source, f"{key}.noise[{j}].up_to",
+                                f"{bands[j]:g} m; expected the bands nearest first, beyond the previous one's "
+                                f"{bands[j - 1]:g} m")
+
+
 def check_geometry(scenario: dict, source: str) -> None:
     """Cross-key checks: names that must exist, places that must be walkable, limits that must be ordered."""
     crowd = scenario["crowd"]
@@ -148,6 +167,7 @@ def check_geometry(scenario: dict, source: str) -> None:
                 raise ScenarioError(source, key, f"{sensor['name']!r} is taken ({seen.get(sensor['name'], 'reserved')})"
                                                  "; expected a name of its own for every sensor")
             seen[sensor["name"]] = key
+            check_sensor(sensor, f"sensors.{kind}[{i}]", scenario["dt"], source)
     segs = wall_segments(scenario)
     radius = max(t["radius"] for t in types.values()) if types else 0.25
     places = [(f"waypoints.{n}.position", w["position"], "goal") for n, w in scenario["waypoints"].items()]

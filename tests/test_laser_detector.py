@@ -174,6 +174,21 @@ def test_nan_beams_split_segments():
     assert len(SegmentDetector(params()).detect(scan_of(holed))) == 0
 
 
+def test_beams_reading_range_max_are_no_returns():
+    # a driver that reports no return as range_max (no_return: range_max) gives the detector what NaN does: the
+    # body's 11 points, split by the beam at 0 deg that returned nothing, and no points 20 m away
+    ranges = circle_ranges((4.0, 0.0))
+    ranges[190] = np.nan
+    as_nan = scan_of(ranges)
+    as_max = scan_of(np.where(np.isnan(ranges), 20.0, ranges))
+    assert (as_max.ranges == 20.0).sum() == N_BEAMS - 10
+    np.testing.assert_array_equal(as_max.returned, np.isfinite(ranges))
+    assert np.isnan(as_max.points()[~as_max.returned]).all()
+    for scan in (as_nan, as_max):
+        labels, pts = SegmentDetector(params()).segments(scan)
+        assert pts.shape[0] == 10 and labels.tolist() == [0] * 5 + [1] * 5
+
+
 def test_far_body_between_two_beams_has_too_few_points():
     # At 18 m the body's half-width is asin(0.18 / 18) = 0.573 deg. Centred at 0.25 deg (between beams), the beams
     # inside (-0.323, 0.823) deg are those at 0 and 0.5 deg: 2 points < min_points 3 -> no detection.

@@ -339,6 +339,36 @@ def test_sensor_names_must_be_unique(tmp_path):
     expect_error(path, "sensors.depth_cameras[0].name", "'front_laser' is taken (sensors.lasers[0].name)")
 
 
+@pytest.mark.parametrize("kind, change, key, words", [
+    # a Hokuyo UTM-30LX scans at 40 Hz: more than the 25 steps a second of the default dt 0.04 s
+    ("lasers", {"preset": "hokuyo_utm30lx"}, "sensors.lasers[0].rate",
+     ["40 Hz is more than the simulation's 25 steps per second (dt 0.04 s)",
+      "at most 25 Hz, or a dt of at most 0.025"]),
+    ("depth_cameras", {"rate": 30.0}, "sensors.depth_cameras[0].rate", ["30 Hz", "a dt of at most 0.0333333 s"]),
+    ("wall_cameras", {"rate": 26.0, "position": [5, 5, 3]}, "sensors.wall_cameras[0].rate", ["26 Hz"]),
+    ("lasers", {"range_min": 6.0, "range_max": 5.0}, "sensors.lasers[0].range_min",
+     ["6 m; expected less than range_max (5 m)"]),
+    ("depth_cameras", {"range_min": 8.0}, "sensors.depth_cameras[0].range_min",
+     ["8 m; expected less than range_max (8 m)"]),
+    ("lasers", {"noise": [{"up_to": 10.0}, {"up_to": 4.0}]}, "sensors.lasers[0].noise[1].up_to",
+     ["4 m; expected the bands nearest first, beyond the previous one's 10 m"]),
+])
+def test_sensors_that_cannot_run_as_given_are_refused(tmp_path, kind, change, key, words):
+    data = yaml.safe_load(open(load_scenario("airport_disembarkation")["source"]).read())
+    if kind == "lasers":
+        data["sensors"]["lasers"][0].update(change)
+    else:
+        data["sensors"][kind] = [{"name": "s", **change}]
+    path = tmp_path / "sensor.yaml"
+    path.write_text(yaml.safe_dump(data))
+    expect_error(path, key, *words)
+    # a smaller simulation step runs the fast sensors
+    if key.endswith(".rate"):
+        data["dt"] = 0.025 if change.get("preset") else 1 / change["rate"]
+        path.write_text(yaml.safe_dump(data))
+        assert load_scenario(str(path))["sensors"][kind][0]["rate"] == change.get("rate", 40.0)
+
+
 def test_airport_has_the_documented_values():
     sc = load_scenario("airport_disembarkation")
     lasers = sc["sensors"]["lasers"]
