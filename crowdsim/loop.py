@@ -110,8 +110,9 @@ class Simulation:
         self._next_wall = np.zeros(len(self.wall_cameras))
         self._pending_depth: list[DepthFrame] = []
         self._pending_camera: list[CameraFrame] = []
-        # sensor -> (ids, amount) of its latest frame: beams per person for a laser, visible share for a camera
-        self._latest_seen: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        # sensor -> (stamp, ids, amount, in view) of its latest frame: beams per person for a laser, visible share
+        # for a camera, for every person alive then
+        self._latest_seen: dict[str, tuple[float, np.ndarray, np.ndarray, np.ndarray]] = {}
         self._latest_scan: dict[str, LaserScan] = {}
         self._fused_ids = 0
         self._frame = 0
@@ -188,7 +189,7 @@ class Simulation:
             self.scene.sync(self.robot.pose, *person)
         if depth_due or wall_due:
             self.camera_scene.sync(self.robot.pose, *person)
-        self._capture_images(stamp, depth_due, wall_due)
+        self._capture_images(stamp, depth_due, wall_due, agents)
         if not due:
             self.timing.sensors_s += time.perf_counter() - t1
             self.timing.wall_s += time.perf_counter() - t0
@@ -198,9 +199,11 @@ class Simulation:
             self._next_scan[k] += self.lasers[k].period
             odom_T_laser = self.lasers[k].pose_in(self.robot.odom_pose)
             batches.append(to_frame(self.detectors[k].detect(scan), odom_T_laser, TRACKING_FRAME))
-        for scan in scans:
+        for k, scan in zip(due, scans):
             self._latest_scan[scan.frame] = scan
-            self._latest_seen[scan.frame] = np.unique(scan.person_id[scan.person_id >= 0], return_counts=True)
+            hit = np.searchsorted(agents.id, scan.person_id[scan.person_id >= 0])
+            beams = np.bincount(hit, minlength=len(agents.id)).astype(float)
+            self._latest_seen[scan.frame] = (stamp, agents.id, beams, self._laser_view(self.lasers[k], agents))
         t2 = time.perf_counter()
         self.timing.sensors_s += t2 - t1
         detections = fuse(batches, self.scenario["pipeline"]["fusion_distance"], self._fused_ids)
@@ -220,50 +223,55 @@ class Simulation:
         self.timing.wall_s += time.perf_counter() - t0
         return frame
 
-    def _capture_images(self, stamp: float, depth_due: list[int], wall_due: list[int]) -> None:
+    def _capture_images(self, stamp: float, depth_due: list[int], wall_due: list[int], agents: AgentStates) -> None:
         for k in depth_due:
-            self._next_depth[k] += self.depth_cameras[k].period
-            image = self.depth_cameras[k].capture(stamp)
+            camera = self.depth_cameras[k]
+            self._next_depth[k] += camera.period
+            image = camera.capture(stamp)
             self._pending_depth.append(image)
-            self._latest_seen[image.frame] = self.depth_cameras[k].visibility(image)
+            ids, share = camera.visibility(image)
+            self._latest_seen[image.frame] = (stamp, agents.id, _on(agents.id, ids, share),
+                                              self._camera_view(camera, agents))
         for k in wall_due:
-            self._next_wall[k] += self.wall_cameras[k].period
-            image = self.wall_cameras[k].capture(stamp)
+            camera = self.wall_cameras[k]
+            self._next_wall[k] += camera.period
+            image = camera.capture(stamp)
             self._pending_camera.append(image)
-            self._latest_seen[image.frame] = (image.ids, image.visible_fraction)
+            self._latest_seen[image.frame] = (stamp, agents.id, _on(agents.id, image.ids, image.visible_fraction),
+                                              self._camera_view(camera, agents))
 
     def _visibility(self, agents: AgentStates) -> Visibility:
-        """Per person and sensor: what the sensor's latest frame saw of them (laser beams that hit them, a camera's
-        visible share; NaN before its first frame), and whether they are within its field of view."""
+        """Per person alive and sensor: what the sensor's latest frame saw of them and whether they were in its view
+        then (NaN and False before its first frame, and for persons who came after it)."""
         n = len(agents.id)
         names = [laser.name for laser in self.lasers] + [c.name for c in self.depth_cameras + self.wall_cameras]
+        stamps = np.full(len(names), np.nan)
         amount = np.full((n, len(names)), np.nan)
         in_view = np.zeros((n, len(names)), bool)
         for k, name in enumerate(names):
             if name in self._latest_seen:
-                ids, seen = self._latest_seen[name]
-                amount[:, k] = 0.0
-                rows = np.searchsorted(agents.id, ids)  # those who have left since are dropped
-                keep = (rows < n) & (agents.id[np.minimum(rows, n - 1)] == ids)
-                amount[rows[keep], k] = seen[keep]
-        for k, laser in enumerate(self.lasers):
-            pose = laser.pose_in(self.robot.pose)
-            rel = agents.position - pose[:2]
-            bearing = np.arctan2(rel[:, 1], rel[:, 0]) - pose[2]
-            half = np.radians(laser.p["fov_deg"]) / 2
-            in_view[:, k] = (np.linalg.norm(rel, axis=1) <= laser.p["range_max"]) & (
-                np.abs(np.arctan2(np.sin(bearing), np.cos(bearing))) <= half)
-        for j, camera in enumerate(self.depth_cameras + self.wall_cameras):
-            k = len(self.lasers) + j
-            origin, rot = camera_pose(self.camera_scene, camera.name)
-            centre = np.column_stack([agents.position, np.full(n, 1.0)])  # the body's middle
-            cam = (centre - origin) @ rot
-            far = camera.p.get("range_max", np.inf)
-            ahead = (cam[:, 2] > 0.05) & (cam[:, 2] <= far)
-            size = camera.intrinsics
-            uv = size.project(np.where(ahead[:, None], cam, [0.0, 0.0, 1.0]))
-            in_view[:, k] = ahead & (uv >= 0).all(axis=1) & (uv[:, 0] < size.width) & (uv[:, 1] < size.height)
-        return Visibility(agents.id.copy(), names, amount, in_view)
+                stamps[k], ids, seen, view = self._latest_seen[name]
+                amount[:, k] = _on(agents.id, ids, seen, np.nan)
+                in_view[:, k] = _on(agents.id, ids, view, False)
+        return Visibility(agents.id.copy(), names, stamps, amount, in_view)
+
+    def _laser_view(self, laser: Laser, agents: AgentStates) -> np.ndarray:
+        """Who is within the laser's field of view and range."""
+        pose = laser.pose_in(self.robot.pose)
+        rel = agents.position - pose[:2]
+        bearing = np.arctan2(rel[:, 1], rel[:, 0]) - pose[2]
+        return (np.linalg.norm(rel, axis=1) <= laser.p["range_max"]) & (
+            np.abs(np.arctan2(np.sin(bearing), np.cos(bearing))) <= np.radians(laser.p["fov_deg"]) / 2)
+
+    def _camera_view(self, camera: DepthCamera | WallCamera, agents: AgentStates) -> np.ndarray:
+        """Who has the middle of their body (1 m up) in the camera's image, within its range."""
+        n = len(agents.id)
+        origin, rot = camera_pose(self.camera_scene, camera.name)
+        cam = (np.column_stack([agents.position, np.full(n, 1.0)]) - origin) @ rot
+        ahead = (cam[:, 2] > 0.05) & (cam[:, 2] <= camera.p.get("range_max", np.inf))
+        size = camera.intrinsics
+        uv = size.project(np.where(ahead[:, None], cam, [0.0, 0.0, 1.0]))
+        return ahead & (uv >= 0).all(axis=1) & (uv[:, 0] < size.width) & (uv[:, 1] < size.height)
 
     def frames(self, duration: float):
         """Yield the Frames of ``duration`` seconds of simulated time (after the warm-up)."""
@@ -272,3 +280,12 @@ class Simulation:
             frame = self.step()
             if frame is not None:
                 yield frame
+
+
+def _on(agent_ids: np.ndarray, ids: np.ndarray, values: np.ndarray, missing=0.0) -> np.ndarray:
+    """``values`` of persons ``ids`` laid out over ``agent_ids`` (sorted); ``missing`` for those not among them."""
+    out = np.full(len(agent_ids), missing, np.result_type(missing, np.asarray(values)))
+    rows = np.searchsorted(agent_ids, ids)
+    keep = (rows < len(agent_ids)) & (agent_ids[np.minimum(rows, len(agent_ids) - 1)] == ids)
+    out[rows[keep]] = np.asarray(values)[keep]
+    return out

@@ -32,6 +32,10 @@ GT_HEADER = CSV_HEADER + ",range,in_range,beams,visible,visible_seed000"
 DETECTIONS_HEADER = "frame,t,id,x,y,confidence"  # the fused detections the tracker was given, odom
 # the robot's true pose in the world and its odometry pose in odom (what the pipeline saw), per tracking cycle
 ROBOT_HEADER = "frame,t,x,y,yaw,odom_x,odom_y,odom_yaw"
+# every sensor frame's ground truth: for each person in the sensor's view or seen by it, the laser beams that hit
+# them or the camera's visible share of them (amount), whether in view, and whether in view but unseen (occluded);
+# t is the sensor frame's own time, frame the tracking cycle that delivered it
+VISIBILITY_HEADER = "frame,t,id,sensor,amount,in_view,occluded"
 CROWD_EVERY = 5  # tracking cycles between the crowd snapshots drawn in the top-down picture
 
 
@@ -79,6 +83,28 @@ def _gt_rows(frame) -> np.ndarray:
     tags = frame.gt_tags
     return np.column_stack([_rows(frame.index, frame.stamp, frame.groundtruth), tags.range, tags.in_range,
                             tags.beams, tags.visible, tags.visible_seed000])
+
+
+def _visibility_rows(frame, written: dict[str, float]) -> list[np.ndarray]:
+    """Rows [frame, t, id, sensor index, amount, in_view, occluded] of the sensors with a frame new since
+    ``written`` (sensor -> the stamp last written, updated)."""
+    v, out = frame.visibility, []
+    for k, name in enumerate(v.sensors):
+        if np.isnan(v.stamps[k]) or written.get(name) == v.stamps[k]:
+            continue
+        written[name] = v.stamps[k]
+        rows = np.flatnonzero(v.in_view[:, k] | (v.amount[:, k] > 0))
+        out.append(np.column_stack([np.full(len(rows), frame.index), np.full(len(rows), v.stamps[k]), v.ids[rows],
+                                    np.full(len(rows), k), v.amount[rows, k], v.in_view[rows, k],
+                                    v.occluded[rows, k]]))
+    return out
+
+
+def write_visibility(path: Path, rows: list[np.ndarray], sensors: list[str]) -> None:
+    table = (np.concatenate(rows) if rows else np.zeros((0, 7))).astype(object)
+    table[:, 3] = np.array(sensors, object)[table[:, 3].astype(int)] if len(table) else table[:, 3]
+    np.savetxt(path, table, fmt=["%d", "%.2f", "%d", "%s", "%.4g", "%d", "%d"], delimiter=",",
+               header=VISIBILITY_HEADER, comments="")
 
 
 def write_csv(path: Path, rows: list[np.ndarray], header: str = CSV_HEADER) -> None:
@@ -148,6 +174,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     warmup_s = time.perf_counter() - start
     recording = Recording(tmp / "recording.rrd", wall_segments(scenario), sim) if rrd else None
     gt_rows, track_rows, detection_rows, robot_rows, counts, robot_path, odom, crowd = [], [], [], [], [], [], [], []
+    visibility_rows, written = [], {}
     duration = scenario["duration"]
     bar = tqdm(total=round(duration, 2), unit="sim s", disable=not progress, desc=scenario["name"],
                bar_format="{l_bar}{bar}| {n:.1f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
@@ -157,6 +184,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         track_rows.append(_rows(frame.index, frame.stamp, frame.tracks))
         detection_rows.append(_detection_rows(frame))
         robot_rows.append(_robot_row(frame))
+        visibility_rows += _visibility_rows(frame, written)
         counts.append(int(frame.gt_tags.in_range.sum()))
         robot_path.append(frame.robot_pose)
         odom.append(frame.world_T_odom)
@@ -174,6 +202,8 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     write_csv(tmp / "tracks.csv", track_rows)
     write_csv(tmp / "detections.csv", detection_rows, DETECTIONS_HEADER)
     write_csv(tmp / "robot.csv", robot_rows, ROBOT_HEADER)
+    write_visibility(tmp / "visibility.csv", visibility_rows, [laser.name for laser in sim.lasers]
+                     + [camera.name for camera in (*sim.depth_cameras, *sim.wall_cameras)])
     # the scenario as run, every default filled in: a scenario file that runs again as it is
     resolved = _without_unset({key: value for key, value in scenario.items() if key != "source"})
     (tmp / "scenario.yaml").write_text(f"# resolved from {scenario['source']}\n"

@@ -86,16 +86,18 @@ class CameraFrame:
 
 @dataclass
 class Visibility:
-    """Who each sensor could see at one tracking cycle (simulation-only ground truth, one row per person alive).
+    """Who each sensor could see at its latest frame, as of one tracking cycle (simulation-only ground truth, one row
+    per person alive).
 
-    ``amount`` [n, k]: what the sensor's latest frame saw of the person (NaN before its first frame): for a laser
-    the number of its beams that hit them, for a camera their visible fraction. ``in_view`` [n, k]: within the
-    sensor's field of view and range, so a person in view whom the sensor's latest frame did not show is
-    ``occluded`` (not before its first frame: that is not known).
+    ``stamps`` [k]: the time of each sensor's latest frame (NaN before its first). ``amount`` [n, k]: what that frame
+    saw of the person: for a laser the number of its beams that hit them, for a camera their visible fraction (NaN
+    before the sensor's first frame and for persons who came after it). ``in_view`` [n, k]: within the sensor's
+    field of view and range at that frame, so a person in view whom the frame did not show is ``occluded``.
     """
 
     ids: np.ndarray
     sensors: list[str]
+    stamps: np.ndarray
     amount: np.ndarray
     in_view: np.ndarray
 

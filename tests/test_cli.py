@@ -162,7 +162,7 @@ def test_short_run_writes_a_complete_run_directory(tmp_path, capsys):
     captured = capsys.readouterr()
     assert listing(tmp_path) == {"tiny.yaml", "out"}  # the temporary directory was moved, not left behind
     assert {"metrics.json", "groundtruth.csv", "tracks.csv", "detections.csv", "robot.csv", "scenario.yaml",
-            "summary.md", "topdown.png"} <= listing(out)
+            "summary.md", "topdown.png", "visibility.csv"} <= listing(out)
     # the resolved scenario is a scenario file that loads to the same scenario
     again, first = load_scenario(str(out / "scenario.yaml")), load_scenario(str(scenario))
     assert again.pop("source") != first.pop("source") and again == first
@@ -201,6 +201,18 @@ def test_short_run_writes_a_complete_run_directory(tmp_path, capsys):
     assert sum(r[8] == 1 and r[10] == 1 for r in gt_rows) == metrics["tracking"]["gt"]
     stamps = [r[1] for r in gt_rows]
     assert 2.0 < min(stamps) and max(stamps) <= 4.0 + 1e-6  # recorded after the 2 s warm-up only
+    # per sensor frame, each person in the laser's view or hit by it, with the beams that hit them; the ground
+    # truth's beams are their sum over the lasers (the rear one faces the empty strip behind the robot)
+    lines = (out / "visibility.csv").read_text().splitlines()
+    assert lines[0] == "frame,t,id,sensor,amount,in_view,occluded"
+    seen = [line.split(",") for line in lines[1:]]
+    assert {r[3] for r in seen} == {"front_laser"} and {int(r[0]) for r in seen} == set(range(50))
+    beams = {}
+    for frame, _, pid, _, amount, in_view, occluded in seen:
+        beams[frame, pid] = beams.get((frame, pid), 0) + int(amount)
+        assert occluded == str(int(in_view == "1" and amount == "0"))
+    assert all(beams.get((f"{r[0]:.0f}", f"{r[2]:.0f}"), 0) == r[9] for r in gt_rows)
+    assert sum(beams.values()) == sum(r[9] for r in gt_rows) > 0
 
     assert (out / "summary.md").read_text().startswith("# tiny_room")
     png = (out / "topdown.png").read_bytes()
@@ -244,6 +256,12 @@ def test_a_camera_run_says_which_renderer_drew_the_cameras(gl, tmp_path, monkeyp
     assert json.loads((tmp_path / "out" / "metrics.json").read_text())["cameras"] == {"front_depth": backend,
                                                                                       "corner_cam": backend}
     assert line in (tmp_path / "out" / "summary.md").read_text()
+    # each camera's ground truth at its own images' times: due every 1/15 and 1/10 s from the end of the 2 s
+    # warm-up, taken at the first 0.04 s tick at or after
+    rows = [r.split(",") for r in (tmp_path / "out" / "visibility.csv").read_text().splitlines()[1:]]
+    assert sorted({r[1] for r in rows if r[3] == "front_depth"}) == ["2.04", "2.08", "2.16", "2.20"]
+    assert sorted({r[1] for r in rows if r[3] == "corner_cam"}) == ["2.04", "2.12", "2.20"]
+    assert all(0 <= float(r[4]) <= 1 for r in rows if r[3] in ("front_depth", "corner_cam"))
 
 
 def test_run_into_an_existing_empty_dir_is_allowed(tmp_path, capsys):

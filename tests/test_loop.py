@@ -19,7 +19,7 @@ def test_same_seed_same_run_bit_for_bit(tmp_path):
     a = run(airport(), tmp_path / "A", progress=False)
     b = run(airport(), tmp_path / "B", progress=False)
     assert a["tracking"] == b["tracking"]
-    for name in ("groundtruth.csv", "tracks.csv"):
+    for name in ("groundtruth.csv", "tracks.csv", "visibility.csv"):
         assert (tmp_path / "A" / name).read_bytes() == (tmp_path / "B" / name).read_bytes()
     c = run(airport(seed=2), tmp_path / "C", progress=False)
     assert (tmp_path / "A" / "groundtruth.csv").read_bytes() != (tmp_path / "C" / "groundtruth.csv").read_bytes()
