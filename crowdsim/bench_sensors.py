@@ -17,11 +17,13 @@ import platform
 
 import numpy as np
 
+from scenarios.format import DEPTH_CAMERA
+from scenarios.schema import validate
+
 from .bench import HALL, _rate, populated_crowd, write_figures
 
-DEPTH = {"name": "front_depth", "position": [0.45, 0.0, 1.45], "yaw": 0.0, "pitch": 0.1, "fovy_deg": 43.0,
-         "width": 160, "height": 120, "rate": 15.0, "range_min": 0.5, "range_max": 8.0, "noise": "kinect",
-         "rgb": False}
+DEPTH = validate({"name": "front_depth", "preset": "kinect_160", "position": [0.45, 0.0, 1.45], "pitch": 0.1},
+                 DEPTH_CAMERA, "<bench>")
 DEPTH_640 = dict(DEPTH, name="front_depth_640", width=640, height=480)
 WALL = {"name": "wall_cam", "position": [1.0, 1.0, 4.0], "yaw": float(np.pi / 4), "pitch": 0.35, "fovy_deg": 45.0,
         "width": 320, "height": 240, "rate": 10.0, "rgb": True}

@@ -193,7 +193,14 @@ DEPTH_CAMERA = Schema({
     "range_max": F("float", 8.0, min=0.0, exclusive_min=True, doc="m, farther depths read NaN (Kinect: ~8)"),
     "rate": F("float", 15.0, min=0.0, exclusive_min=True, doc="Hz, at most 1 / dt"),
     "noise": F("str", "kinect", choices=("kinect", "none"),
-               doc="kinect: sigma 1.425e-3 z^2 and 1/8-pixel disparity steps (Khoshelham & Elberink 2012)"),
+               doc="kinect: Gaussian depth noise, then depth quantized through the disparity (the keys below)"),
+    "noise_sigma": F("float", 1.425e-3, min=0.0,
+                     doc="1/m, the noise's sigma per z^2 (Khoshelham & Elberink 2012: 1.425e-3)"),
+    "ir_focal_px": F("float", 580.0, min=0.0, exclusive_min=True,
+                     doc="px, focal length of the IR camera the disparity is measured in (Kinect: 580)"),
+    "ir_baseline": F("float", 0.075, min=0.0, exclusive_min=True,
+                     doc="m, IR projector to IR camera (Kinect: 0.075)"),
+    "disparity_subpixel": F("int", 8, min=1, doc="disparity steps per pixel (Kinect: 8, a 1/8-pixel step)"),
     "rgb": F("bool", False, doc="render a colour image too (a second pass)"),
 }, presets=DEPTH_CAMERA_PRESETS)
 

@@ -22,12 +22,6 @@ from pipeline.types import CameraFrame, DepthFrame
 from . import body, bodycast
 from .scene import LEG_GROUP, TORSO_GROUP, Scene
 
-# Kinect depth noise after Khoshelham & Elberink 2012 (Sensors 12(2) 1437-1454): sigma_z = 1.425e-3 z^2 m, and
-# depth quantized through the disparity, measured in 1/8 pixel by an IR camera of f = 580 px on a 7.5 cm baseline
-KINECT_SIGMA = 1.425e-3  # 1/m
-KINECT_FOCAL_PX = 580.0
-KINECT_BASELINE = 0.075  # m
-KINECT_SUBPIXEL = 8
 MUJOCO_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])  # MuJoCo camera axes (x right, y up, z back) -> optical
 NEAR_CLIP, FAR_CLIP = 0.05, 200.0  # m, the GL clipping planes
 
@@ -271,13 +265,15 @@ def make_renderer(scene: Scene, intrinsics: Intrinsics, exclude_body: int = -1, 
     return RaycastRenderer(scene, intrinsics, exclude_body, people)
 
 
-def kinect_noise(depth: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Khoshelham & Elberink's Kinect depth error: Gaussian with sigma 1.425e-3 z^2, then quantization of the
-    disparity to 1/8 pixel."""
+def kinect_noise(depth: np.ndarray, rng: np.random.Generator, p: dict) -> np.ndarray:
+    """The depth error of a structured-light camera after Khoshelham & Elberink 2012 (Sensors 12(2) 1437-1454):
+    Gaussian with sigma ``noise_sigma`` z^2, then the depth quantized through the disparity, measured in steps of
+    1 / ``disparity_subpixel`` pixel by an IR camera of focal length ``ir_focal_px`` on a baseline ``ir_baseline``
+    (the camera's scenario keys; the Kinect's by default)."""
     seen = np.isfinite(depth)
     z = np.where(seen, depth, 0.0)
-    noisy = z + rng.standard_normal(depth.shape) * (KINECT_SIGMA * z * z)
-    fb = KINECT_FOCAL_PX * KINECT_BASELINE * KINECT_SUBPIXEL
+    noisy = z + rng.standard_normal(depth.shape) * (p["noise_sigma"] * z * z)
+    fb = p["ir_focal_px"] * p["ir_baseline"] * p["disparity_subpixel"]
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(seen, fb / np.round(fb / noisy), np.inf).astype(np.float32)
 
@@ -306,7 +302,7 @@ class DepthCamera:
         out = self.renderer.render(self.name, depth=True, segmentation=True, rgb=self.p["rgb"])
         z = out["depth"]
         if self.p["noise"] == "kinect":
-            z = kinect_noise(z, self.rng)
+            z = kinect_noise(z, self.rng, self.p)
         valid = (z >= self.p["range_min"]) & (z <= self.p["range_max"])
         z = np.where(valid, z, np.nan).astype(np.float32)
         points = self._rays[valid] * z[valid][:, None]

@@ -4,23 +4,22 @@ box of a person at a known position, visible fractions, and agreement of segment
 import numpy as np
 import pytest
 
-from scenarios.format import LASER
+from scenarios.format import DEPTH_CAMERA, LASER
 from scenarios.schema import validate
 from sensors import body
-from sensors.camera import (KINECT_BASELINE, KINECT_FOCAL_PX, KINECT_SUBPIXEL, DepthCamera, GLRenderer, Intrinsics,
-                            RaycastRenderer, WallCamera, camera_pose)
+from sensors.camera import DepthCamera, GLRenderer, Intrinsics, RaycastRenderer, WallCamera, camera_pose
 from sensors.laser import Laser
 from sensors.scene import Scene
 
 WALL_X = [[[5.0, -30.0], [5.0, 30.0]]]  # its face towards the robot at x = 4.95
-DEPTH = {"name": "front_depth", "position": [0.45, 0.0, 1.2], "yaw": 0.0, "pitch": 0.0, "fovy_deg": 43.0,
-         "width": 160, "height": 120, "rate": 15.0, "range_min": 0.5, "range_max": 8.0, "noise": "none", "rgb": False}
+DEPTH = validate({"name": "front_depth", "preset": "kinect_160", "position": [0.45, 0.0, 1.2], "noise": "none"},
+                 DEPTH_CAMERA, "<test>")
 WALL_CAM = {"name": "wall_cam", "position": [0.0, 0.0, 3.0], "yaw": 0.0, "pitch": float(np.radians(30.0)),
             "fovy_deg": 50.0, "width": 320, "height": 240, "rate": 10.0, "rgb": False}
 
 
 def depth_scene(walls=WALL_X, capacity=4, **camera):
-    cam = dict(DEPTH, **camera)
+    cam = validate(dict(DEPTH, **camera), DEPTH_CAMERA, "<test>")
     return Scene(np.array(walls, float), 0.425, capacity, robot_cameras=[cam]), cam
 
 
@@ -75,18 +74,21 @@ def test_point_cloud_lies_on_the_wall():
     assert len(frame.points) == np.isfinite(frame.depth).sum()
 
 
-def test_kinect_noise_has_the_published_sigma_and_disparity_steps():
-    # at 4.5 m: sigma 1.425e-3 x 4.5^2 = 28.9 mm, and the depth is quantized where 8 f b / z is a whole number
-    scene, cam = depth_scene(noise="kinect", range_max=20.0)
+@pytest.mark.parametrize("sigma, subpixel", [(1.425e-3, 8), (2.85e-3, 64)])
+def test_kinect_noise_has_the_configured_sigma_and_disparity_steps(sigma, subpixel):
+    # the Kinect's at 4.5 m: sigma 1.425e-3 x 4.5^2 = 28.9 mm, and the depth quantized where 8 f b / z (f 580 px,
+    # b 7.5 cm) is a whole number, 58 mm between levels; then twice the sigma on 1/64-pixel steps
+    scene, cam = depth_scene(noise="kinect", range_max=20.0, noise_sigma=sigma, disparity_subpixel=subpixel)
+    assert (cam["ir_focal_px"], cam["ir_baseline"]) == (580.0, 0.075)
     scene.sync(np.zeros(3), np.zeros(0, np.int64), np.zeros((0, 2)))
     frame = DepthCamera(cam, scene, np.random.default_rng(3)).capture(0.0)
     wall = np.abs(expected_depth(cam) - 4.5) < 1e-9
     z = frame.depth[wall & np.isfinite(frame.depth)]
-    steps = KINECT_SUBPIXEL * KINECT_FOCAL_PX * KINECT_BASELINE / z
+    steps = subpixel * 580.0 * 0.075 / z
     np.testing.assert_allclose(steps, np.round(steps), atol=1e-3)
-    step = 4.5**2 / (KINECT_SUBPIXEL * KINECT_FOCAL_PX * KINECT_BASELINE)  # 58 mm between levels at 4.5 m
+    step = 4.5**2 / (subpixel * 580.0 * 0.075)
     assert abs(z.mean() - 4.5) < 0.01
-    assert z.std() == pytest.approx(np.hypot(1.425e-3 * 4.5**2, step / np.sqrt(12)), rel=0.15)
+    assert z.std() == pytest.approx(np.hypot(sigma * 4.5**2, step / np.sqrt(12)), rel=0.15)
 
 
 def test_wall_camera_box_of_a_person_is_its_projection_within_a_pixel():
