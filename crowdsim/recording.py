@@ -40,6 +40,12 @@ class Recording:
         self.depth_mounts = np.array([[*c.p["position"][:2], c.p["yaw"]] for c in sim.depth_cameras]).reshape(-1, 3)
         self.sensor_names = [laser.name for laser in sim.lasers] + [c.name for c in sim.depth_cameras]
         self.rec.log("world/walls", rr.LineStrips2D(list(walls), colors=[90, 90, 100]), static=True)
+        for camera in (*sim.depth_cameras, *sim.wall_cameras):
+            # the camera's intrinsics, in the optical frame (x right, y down, z forward): a 3D view shows its depth
+            # image as a point cloud
+            k = camera.intrinsics
+            self.rec.log(f"cameras/{camera.name}", rr.Pinhole(focal_length=float(k.f), width=k.width, height=k.height,
+                                                             camera_xyz=rr.ViewCoordinates.RDF), static=True)
         if sim.wall_cameras:
             poses = np.array([[*c.p["position"][:2], c.p["yaw"]] for c in sim.wall_cameras])
             self.rec.log("world/wall_cameras", rr.Arrows2D(**_axes(poses, 1.0), colors=[0, 160, 160],
@@ -87,7 +93,8 @@ class Recording:
                                           colors=[[255, 0, 0], [0, 255, 0]]))
 
     def log_images(self, frame: Frame) -> None:
-        """The robot's depth images (and colour) and the wall cameras' images with each person's visible box."""
+        """The robot's depth images (and colour) and the wall cameras' images, each with its people's segmentation
+        (id + 1 modulo 256), the wall cameras' with each person's visible box."""
         rec = self.rec
         for image in frame.depth_frames:
             rec.set_time("sim_time", duration=image.stamp)
@@ -99,6 +106,8 @@ class Recording:
             rec.set_time("sim_time", duration=image.stamp)
             if image.rgb is not None:
                 rec.log(f"cameras/{image.frame}/rgb", rr.Image(image.rgb))
+            rec.log(f"cameras/{image.frame}/segmentation",
+                    rr.SegmentationImage(np.maximum(image.person_id + 1, 0) % 256))
             rec.log(f"cameras/{image.frame}/rgb/people", rr.Boxes2D(
                 array=image.boxes, array_format=rr.Box2DFormat.XYXY, class_ids=image.ids % 256,
                 labels=[f"{i} ({100 * f:.0f}% visible)" for i, f in zip(image.ids, image.visible_fraction)]))
