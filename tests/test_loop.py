@@ -175,8 +175,9 @@ def test_the_recording_holds_the_camera_images_boxes_and_the_robots_frames(tmp_p
     listing = subprocess.run([str(rerun_cli), "rrd", "print", str(tmp_path / "out" / "recording.rrd")],
                              capture_output=True, text=True, check=True).stdout
     for entity in ("/cameras/front_depth/depth", "/cameras/front_depth/people", "/cameras/corner_cam/rgb",
-                   "/cameras/corner_cam/rgb/people", "/cameras/corner_cam/segmentation", "Pinhole", "/world/laser_points", "/world/tracks", "/world/robot/base_link",
-                   "/world/robot/sensors", "/world/wall_cameras", "/world/odom"):
+                   "/cameras/corner_cam/rgb/people", "/cameras/corner_cam/segmentation", "Pinhole",
+                   "/world/laser_points", "/world/tracks", "/world/robot/base_link", "/world/robot/sensors",
+                   "/world/wall_cameras", "/world/odom"):
         assert entity in listing, entity
 
 
