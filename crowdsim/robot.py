@@ -57,7 +57,8 @@ class Robot:
         return d, t
 
     def drive_command(self, front_clearance: float) -> tuple[float, float]:
-        """(v, omega) towards the next route point; stop when something is nearer than the safety distance."""
+        """(v, omega) towards the next route point, steering on the true pose (a robot localised against its map);
+        stop when something is nearer than the safety distance."""
         if len(self.route) == 0 or self.target >= len(self.route):
             return 0.0, 0.0
         goal = self.route[self.target]
