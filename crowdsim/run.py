@@ -102,7 +102,7 @@ def _visibility_rows(frame, written: dict[str, float]) -> list[np.ndarray]:
 
 def write_visibility(path: Path, rows: list[np.ndarray], sensors: list[str]) -> None:
     table = (np.concatenate(rows) if rows else np.zeros((0, 7))).astype(object)
-    table[:, 3] = np.array(sensors, object)[table[:, 3].astype(int)] if len(table) else table[:, 3]
+    table[:, 3] = np.array(sensors, object)[table[:, 3].astype(int)]
     np.savetxt(path, table, fmt=["%d", "%.2f", "%d", "%s", "%.4g", "%d", "%d"], delimiter=",",
                header=VISIBILITY_HEADER, comments="")
 
