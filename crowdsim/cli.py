@@ -141,7 +141,7 @@ def _cmd_scenario_keys(args) -> int:
 
 def _cmd_validate(args) -> int:
     from .run import check_out_dir
-    from .validation import run_validation
+    from .crowd.validation import run_validation
 
     out = Path(args.out) if args.out else Path("runs") / f"validation-{time.strftime('%Y%m%d-%H%M%S')}"
     check_out_dir(out)
@@ -159,19 +159,19 @@ def _cmd_bench(args) -> int:
     if args.json and Path(args.json).exists():
         raise EvaluationInputError(f"--json {args.json}: already exists; expected a new file (nothing was measured)")
     if args.what == "sim":
-        from .bench_sim import run_sim_benchmark
+        from .bench.sim import run_sim_benchmark
 
         run_sim_benchmark(quick=args.quick, json_path=args.json)
     elif args.what == "eval":
-        from .bench_eval import run_eval_benchmark
+        from .bench.eval import run_eval_benchmark
 
         run_eval_benchmark(json_path=args.json, quick=args.quick)
     elif args.what == "sensors":
-        from .bench_sensors import run_sensor_benchmarks
+        from .bench.sensors import run_sensor_benchmarks
 
         run_sensor_benchmarks(json_path=args.json, quick=args.quick)
     else:
-        from .bench import run_benchmarks
+        from .bench.parts import run_benchmarks
 
         run_benchmarks(json_path=args.json, quick=args.quick)
     return 0

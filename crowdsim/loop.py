@@ -16,8 +16,8 @@ from evaluation import ClearMot, FrameResult
 from evaluation.occlusion import seed000_visible
 from pipeline.fusion import fuse, to_frame
 from pipeline.frames import inverse, transform_points
-from pipeline.laser_detector import SegmentDetector
-from pipeline.tracker import NearestNeighbourTracker, TrackerParams
+from pipeline.detectors.laser_segments import SegmentDetector
+from pipeline.tracking.nnt import NearestNeighbourTracker, TrackerParams
 from pipeline.types import (CameraFrame, DepthFrame, DetectedPersons, GroundTruthTags, LaserScan, TrackedPersons,
                             Visibility)
 from scenarios.geometry import wall_segments

@@ -227,7 +227,7 @@ DETECTOR = Schema({
                            doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)"),
 })
 
-TRACKER = Schema({  # the defaults are pipeline.tracker.TrackerParams' (a test keeps the two equal)
+TRACKER = Schema({  # the defaults are pipeline.tracking.nnt.TrackerParams' (a test keeps the two equal)
     "process_noise": F("float", 0.267, min=0.0, exclusive_min=True,
                        doc="m^2/s^3, q_L of seed 000 Eq. 2 (its IMM's manoeuvre level, Sec. V-D)"),
     "gate_chi2": F("float", 13.82, min=0.0, exclusive_min=True, doc="Mahalanobis gate (chi2 0.999 for 2 dof)"),

@@ -9,6 +9,7 @@ import yaml
 
 from .format import SCENARIO
 from .geometry import closest_on_segments, inside_polygon, wall_segments
+from .pedsim import pedsim_to_scenario
 from .schema import ScenarioError, validate
 
 BUNDLED = Path(__file__).parent / "bundled"
@@ -80,8 +81,6 @@ def load_scenario(name_or_path: str, **overrides) -> dict:
     path is read as a PedSim scenario (``scenarios.pedsim``)."""
     path = resolve(name_or_path)
     if path.suffix.lower() == ".xml":
-        from .pedsim import pedsim_to_scenario  # pedsim builds on this module
-
         raw = pedsim_to_scenario(path)
     else:
         raw = read_raw(path)

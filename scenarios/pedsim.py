@@ -1,8 +1,8 @@
 """Import of PedSim scenario files (pedsim_ros XML) into the scenario format.
 
-``pedsim_to_scenario(path)`` returns raw scenario data (a dict as a YAML file would hold it) and ``load_pedsim(path)``
-returns it validated by ``scenarios.loader.scenario_from_dict``. Anything the importer cannot carry over, or has to
-change, is reported as a ``PedsimWarning`` naming the XML file, the line and the element; malformed files raise
+``pedsim_to_scenario(path)`` returns raw scenario data (a dict as a YAML file would hold it);
+``scenarios.load_scenario`` validates it, as it does any ``.xml`` path. Anything the importer cannot carry over, or has
+to change, is reported as a ``PedsimWarning`` naming the XML file, the line and the element; malformed files raise
 ``ScenarioError`` naming the file and, where known, the line.
 
 How PedSim's elements map (PedSim's units are metres, as ours):
@@ -514,10 +514,3 @@ def pedsim_to_scenario(path) -> dict:
     converter = _Converter(path)
     converter.read(_parse(path))
     return converter.build()
-
-
-def load_pedsim(path) -> dict:
-    """The PedSim scenario file at ``path``, converted and validated (defaults filled in)."""
-    from .loader import scenario_from_dict  # here, not at the top: the loader imports this module
-
-    return scenario_from_dict(pedsim_to_scenario(path), str(path))

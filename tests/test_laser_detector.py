@@ -6,7 +6,7 @@ The scans have the default laser's layout: 381 beams from -95 deg to +95 deg eve
 import numpy as np
 import pytest
 
-from pipeline.laser_detector import SegmentDetector
+from pipeline.detectors.laser_segments import SegmentDetector
 from pipeline.types import UNKNOWN_VARIANCE, LaserScan
 from scenarios.format import DETECTOR
 from scenarios.schema import validate

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from evaluation import ClearMot
-from pipeline.tracker import (
+from pipeline.tracking.nnt import (
     NearestNeighbourTracker,
     TrackerParams,
     greedy_assign,

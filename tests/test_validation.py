@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from crowdsim import validation as V
+from crowdsim.crowd import validation as V
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

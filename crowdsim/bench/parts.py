@@ -1,76 +1,20 @@
-"""``crowdsim bench``: the speed of each hot part and of the whole loop, measured side by side in one run.
-
-Each figure is the median rate over repeated timed blocks after a warm-up block, so one slow block (another process
-waking up) does not decide it.
-"""
+"""``crowdsim bench``: the speed of each hot part (crowd, laser, tracker) and of the whole loop, measured side by side
+in one run."""
 
 from __future__ import annotations
 
-import json
 import platform
 import time
 
 import numpy as np
 
-from scenarios import load_scenario, scenario_from_dict
+from scenarios import load_scenario
 
-HALL = 40.0  # m, side of the walled hall the crowd benchmark walks in
-
-
-def write_figures(json_path: str | None, figures: dict) -> None:
-    """The figures as JSON, when asked for (the command checked the file is new before measuring)."""
-    if json_path:
-        with open(json_path, "x") as f:
-            json.dump(figures, f, indent=2)
-            f.write("\n")
-
-
-def _rate(fn, calls: int, blocks: int = 5) -> float:
-    """Median calls/s of ``fn`` over ``blocks`` timed blocks of ``calls`` calls (one untimed block first)."""
-    for _ in range(max(1, calls // 5)):
-        fn()
-    rates = []
-    for _ in range(blocks):
-        t = time.perf_counter()
-        for _ in range(calls):
-            fn()
-        rates.append(calls / (time.perf_counter() - t))
-    return float(np.median(rates))
-
-
-def bench_scenario(n_agents: int) -> dict:
-    """A square walled hall with four corner waypoints that ``n_agents`` walkers circle round."""
-    h = HALL
-    return scenario_from_dict({
-        "name": "bench_hall",
-        "map": {"walls": [[[0, 0], [h, 0], [h, h], [0, h], [0, 0]]]},
-        "crowd": {"max_agents": n_agents},
-        "waypoints": {f"c{k}": {"position": list(p), "radius": 2.0}
-                      for k, p in enumerate([(5, 5), (h - 5, 5), (h - 5, h - 5), (5, h - 5)])},
-        "routes": {"loop": {"waypoints": ["c0", "c1", "c2", "c3"], "sink": False}},
-        "robot": {"start": [h / 2, h / 2, 0.0]},
-        "sensors": {"lasers": [{"name": "front_laser", "mount": [0.25, 0, 0]},
-                               {"name": "rear_laser", "mount": [-0.25, 0, float(np.pi)]}]},
-    }, source="<bench hall>")
-
-
-def populated_crowd(n_agents: int, seed: int = 0):
-    """The bench hall's crowd with ``n_agents`` walkers on a jittered grid, and its scenario."""
-    from .crowd import Crowd
-
-    scenario = bench_scenario(n_agents)
-    rng = np.random.default_rng(seed)
-    crowd = Crowd(scenario, rng)
-    side = int(np.ceil(np.sqrt(n_agents)))
-    g = (np.arange(side) + 0.5) * (HALL - 2) / side + 1
-    xy = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)[:n_agents] + rng.uniform(-0.1, 0.1, (n_agents, 2))
-    crowd.add_walkers(xy, "loop")
-    return crowd, scenario
-
+from .common import HALL, populated_crowd, rate, write_figures
 
 def bench_crowd(n_agents: int, quick: bool) -> float:
     crowd, _ = populated_crowd(n_agents)
-    return _rate(lambda: crowd.step(0.04), 5 if quick else 40 if n_agents <= 100 else 10)
+    return rate(lambda: crowd.step(0.04), 5 if quick else 40 if n_agents <= 100 else 10)
 
 
 def bench_laser(n_people: int, quick: bool) -> float:
@@ -82,11 +26,11 @@ def bench_laser(n_people: int, quick: bool) -> float:
     pose = np.array([HALL / 2, HALL / 2, 0.0])
     scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked, body_scale(crowd.id, crowd.radius))
     laser = Laser(scenario["sensors"]["lasers"][0], scene, np.random.default_rng(0))
-    return _rate(lambda: laser.scan(0.0, pose), 50 if quick else 400)
+    return rate(lambda: laser.scan(0.0, pose), 50 if quick else 400)
 
 
 def bench_tracker(n_tracks: int, quick: bool) -> float:
-    from pipeline.tracker import NearestNeighbourTracker
+    from pipeline.tracking.nnt import NearestNeighbourTracker
     from pipeline.types import DetectedPersons
 
     rng = np.random.default_rng(0)
@@ -113,11 +57,11 @@ def bench_tracker(n_tracks: int, quick: bool) -> float:
         tracker.update(f.stamp, f)
         state["k"] += 1
 
-    return _rate(cycle, 50 if quick else 190 // 5)
+    return rate(cycle, 50 if quick else 190 // 5)
 
 
 def bench_loop(quick: bool) -> dict:
-    from .loop import Simulation
+    from crowdsim.loop import Simulation
 
     duration = 5.0 if quick else 30.0
     scenario = load_scenario("airport_disembarkation", duration=duration)

@@ -37,7 +37,7 @@ import numpy as np
 
 from scenarios import scenario_from_dict
 
-from .bench import write_figures
+from .common import write_figures
 
 CORRIDOR_LENGTH = 250.0  # m
 CORRIDOR_WIDTH = 20.0  # m
@@ -84,7 +84,7 @@ def start_positions(n_agents: int, rng: np.random.Generator) -> np.ndarray:
 
 def our_crowd(n_agents: int, seed: int = 0):
     """Our crowd in the corridor with ``n_agents`` adults; returns it, their start positions and desired speeds."""
-    from .crowd import Crowd
+    from crowdsim.crowd import Crowd
 
     rng = np.random.default_rng(seed)
     positions = start_positions(n_agents, rng)

@@ -20,7 +20,7 @@ import numpy as np
 from scenarios.format import DEPTH_CAMERA
 from scenarios.schema import validate
 
-from .bench import HALL, _rate, populated_crowd, write_figures
+from .common import HALL, populated_crowd, rate, write_figures
 
 DEPTH = validate({"name": "front_depth", "preset": "kinect_160", "position": [0.45, 0.0, 1.45], "pitch": 0.1},
                  DEPTH_CAMERA, "<bench>")
@@ -58,24 +58,24 @@ def per_call_ms(n_people: int, quick: bool) -> dict:
     reps = 10 if quick else 60
     out = {}
     scene, pose, sync, lasers, _ = _setup(n_people, {"torso"}, cameras=False)
-    out["scene_sync_torsos_only"] = 1e3 / _rate(sync, reps)
-    out["laser_70cm_torsos_only"] = 1e3 / _rate(lambda: lasers[0].scan(0.0, pose), reps)
+    out["scene_sync_torsos_only"] = 1e3 / rate(sync, reps)
+    out["laser_70cm_torsos_only"] = 1e3 / rate(lambda: lasers[0].scan(0.0, pose), reps)
     both = LaserArray(lasers, scene)
-    out["two_lasers_one_batched_call"] = 1e3 / _rate(lambda: both.scan(0.0, pose, [0, 1]), reps)
+    out["two_lasers_one_batched_call"] = 1e3 / rate(lambda: both.scan(0.0, pose, [0, 1]), reps)
     scene, pose, sync, lasers, _ = _setup(n_people, ("torso", "head", "legs"), cameras=True)
-    out["scene_sync"] = 1e3 / _rate(sync, reps)
-    out["laser_70cm_full_bodies"] = 1e3 / _rate(lambda: lasers[0].scan(0.0, pose), reps)
+    out["scene_sync"] = 1e3 / rate(sync, reps)
+    out["laser_70cm_full_bodies"] = 1e3 / rate(lambda: lasers[0].scan(0.0, pose), reps)
     leg = Laser(validate({"name": "leg_laser", "mount": [0.25, 0, 0], "preset": "sick_s300"}, LASER, "<bench>"),
                 scene, np.random.default_rng(0))
-    out["laser_38cm_s300_full_bodies"] = 1e3 / _rate(lambda: leg.scan(0.0, pose), reps)
+    out["laser_38cm_s300_full_bodies"] = 1e3 / rate(lambda: leg.scan(0.0, pose), reps)
     depth = DepthCamera(DEPTH, scene, np.random.default_rng(0))
-    out["depth_160x120"] = 1e3 / _rate(lambda: depth.capture(0.0), max(3, reps // 3))
+    out["depth_160x120"] = 1e3 / rate(lambda: depth.capture(0.0), max(3, reps // 3))
     image = depth.capture(0.0)
-    out["depth_160x120_visibility"] = 1e3 / _rate(lambda: depth.visibility(image), max(3, reps // 3))
+    out["depth_160x120_visibility"] = 1e3 / rate(lambda: depth.visibility(image), max(3, reps // 3))
     depth640 = DepthCamera(DEPTH_640, scene, np.random.default_rng(0))
-    out["depth_640x480"] = 1e3 / _rate(lambda: depth640.capture(0.0), max(2, reps // 10))
+    out["depth_640x480"] = 1e3 / rate(lambda: depth640.capture(0.0), max(2, reps // 10))
     wall = WallCamera(WALL, scene)
-    out["wall_320x240_rgb_boxes"] = 1e3 / _rate(lambda: wall.capture(0.0), max(3, reps // 3))
+    out["wall_320x240_rgb_boxes"] = 1e3 / rate(lambda: wall.capture(0.0), max(3, reps // 3))
     out["renderer"] = depth.backend
     out["people_in_wall_image"] = int(len(wall.capture(0.0).ids))
     return out
@@ -95,7 +95,7 @@ def batched_rays_us(n_people: int, quick: bool) -> dict:
         dirs.append(np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], 1))
         origins.append(np.tile([p[0], p[1], laser.p["height"]], (laser.n_beams, 1)))
     reps = 20 if quick else 200
-    multiray = 1e6 / _rate(lambda: [laser.scan(0.0, pose) for laser in lasers], reps)
+    multiray = 1e6 / rate(lambda: [laser.scan(0.0, pose) for laser in lasers], reps)
     out = {"two_mj_multiRay_calls": multiray}
     for threads in (1, 2):
         b = batch.Batch(scene.model, nsim=threads, nthread=threads)
@@ -111,7 +111,7 @@ def batched_rays_us(n_people: int, quick: bool) -> dict:
                                scene.robot_body, g, d, None, laser.n_beams, 1e4)
             ref[k * laser.n_beams:(k + 1) * laser.n_beams] = d
         agree = float(np.abs(np.where(dist.ravel() < 0, -1, dist.ravel()) - np.where(ref < 0, -1, ref)).max())
-        out[f"one_Batch_ray_call_{threads}_thread"] = 1e6 / _rate(lambda: b.ray(pnt, vec, bodyexclude=scene.robot_body),
+        out[f"one_Batch_ray_call_{threads}_thread"] = 1e6 / rate(lambda: b.ray(pnt, vec, bodyexclude=scene.robot_body),
                                                                    reps)
         out[f"max_range_difference_m_{threads}_thread"] = agree
     return out
@@ -150,7 +150,7 @@ def airport_mix_ms(quick: bool, people: int = 100) -> dict:
     from sensors.body import body_scale
     from sensors.camera import DepthCamera
 
-    from .loop import Simulation
+    from crowdsim.loop import Simulation
 
     sim = Simulation(load_scenario("airport_disembarkation_cameras"))
     sim.warm_up()
@@ -167,12 +167,12 @@ def airport_mix_ms(quick: bool, people: int = 100) -> dict:
     wall = sim.wall_cameras[0]
     sim.camera_scene.sync(pose, *person)
     image = depth.capture(0.0)
-    out = {"scene_sync_torsos_only": 1e3 / _rate(lambda: sim.scene.sync(pose, *person), reps),
-           "two_lasers_one_batched_call": 1e3 / _rate(lambda: sim.laser_array.scan(0.0, pose, [0, 1]), reps),
-           "scene_sync": 1e3 / _rate(lambda: sim.camera_scene.sync(pose, *person), reps),
-           "depth_160x120": 1e3 / _rate(lambda: depth.capture(0.0), max(3, reps // 3)),
-           "depth_160x120_visibility": 1e3 / _rate(lambda: depth.visibility(image), max(3, reps // 3)),
-           "wall_320x240_rgb_boxes": 1e3 / _rate(lambda: wall.capture(0.0), max(3, reps // 3)),
+    out = {"scene_sync_torsos_only": 1e3 / rate(lambda: sim.scene.sync(pose, *person), reps),
+           "two_lasers_one_batched_call": 1e3 / rate(lambda: sim.laser_array.scan(0.0, pose, [0, 1]), reps),
+           "scene_sync": 1e3 / rate(lambda: sim.camera_scene.sync(pose, *person), reps),
+           "depth_160x120": 1e3 / rate(lambda: depth.capture(0.0), max(3, reps // 3)),
+           "depth_160x120_visibility": 1e3 / rate(lambda: depth.visibility(image), max(3, reps // 3)),
+           "wall_320x240_rgb_boxes": 1e3 / rate(lambda: wall.capture(0.0), max(3, reps // 3)),
            "renderer": depth.backend, "people_in_wall_image": int(len(wall.capture(0.0).ids))}
     return out
 

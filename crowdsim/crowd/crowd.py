@@ -1,4 +1,4 @@
-"""The pedestrian crowd: vectorized social forces (crowdsim.forces) with sources, routes, queues and sinks.
+"""The pedestrian crowd: vectorized social forces (crowdsim.crowd.forces) with sources, routes, queues and sinks.
 
 Every per-step computation works on arrays over agents or over neighbour pairs found with a k-d tree, so a step
 costs O(N log N), not O(N^2). Social forces steer; pymunk then moves the bodies and resolves their contacts (the

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .types import UNKNOWN_VARIANCE, DetectedPersons, LaserScan
+from pipeline.types import UNKNOWN_VARIANCE, DetectedPersons, LaserScan
 
 
 class SegmentDetector:

@@ -17,7 +17,7 @@ import numpy as np
 
 from evaluation import Sequence
 
-from .bench import write_figures
+from .common import write_figures
 
 FRAMES, PERSONS = 5000, 80
 

@@ -1,0 +1,1 @@
+"""Trackers and their parts: each tracker has ``update(stamp, detections) -> TrackedPersons`` and ``reset()``."""
