@@ -17,7 +17,8 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 def _cmd_run(args) -> int:
     from scenarios import load_scenario
 
-    from .run import cameras_line, check_out_dir, run, summary_table
+    from .outdir import check_out_dir
+    from .run import cameras_line, run, summary_table
 
     scenario = load_scenario(args.scenario, seed=args.seed, duration=args.duration)
     out = Path(args.out) if args.out else Path("runs") / f"{scenario['name']}-{time.strftime('%Y%m%d-%H%M%S')}"
@@ -35,13 +36,12 @@ def _cmd_run(args) -> int:
 def _cmd_evaluate(args) -> int:
     import json
 
-    import numpy as np
-
-    from evaluation.io import EvaluationInputError, load_sequence, write_motchallenge
+    from evaluation.io import EvaluationInputError, write_motchallenge
     from evaluation.score import (SEED000_COLUMNS, SEED001_COLUMNS, mean_sd, score_tracking, seeds_table,
                                   tracking_table)
+    from evaluation.stream import CsvPair
 
-    from .run import check_out_dir
+    from .outdir import check_out_dir
 
     if args.json and Path(args.json).exists():
         raise EvaluationInputError(f"--json {args.json}: already exists; expected a new file (nothing was written)")
@@ -52,14 +52,14 @@ def _cmd_evaluate(args) -> int:
     if bool(args.runs) == bool(args.gt or args.tracks) or (not args.runs and not (args.gt and args.tracks)):
         raise EvaluationInputError("expected either --gt GT.csv and --tracks TRACKS.csv, or --runs DIR [DIR ...]")
 
-    def load(gt_path, tracks_path):
-        return (load_sequence(gt_path, occlusion=not args.no_occlusion, visible_column=args.visible_column,
-                              max_range=args.max_range), load_sequence(tracks_path, occlusion=False))
+    def files(gt_path, tracks_path) -> CsvPair:
+        return CsvPair(gt_path, tracks_path, occlusion=not args.no_occlusion, visible_column=args.visible_column,
+                       max_range=args.max_range)
 
     if args.runs:
         if args.motchallenge:
             raise EvaluationInputError("--motchallenge exports one pair of files: give --gt and --tracks")
-        runs = [score_tracking(*load(Path(d) / "groundtruth.csv", Path(d) / "tracks.csv"), args.threshold)
+        runs = [score_tracking(files(Path(d) / "groundtruth.csv", Path(d) / "tracks.csv"), args.threshold)
                 for d in args.runs]
         print(f"{len(runs)} runs at {args.threshold:g} m, mean and sample standard deviation")
         print(seeds_table(runs, SEED000_COLUMNS))
@@ -69,21 +69,19 @@ def _cmd_evaluate(args) -> int:
         if args.json:
             Path(args.json).write_text(json.dumps({"runs": runs, "mean": mean, "sd": sd}, indent=2) + "\n")
         return 0
-    gt, tracks = load(args.gt, args.tracks)
-    tracking = score_tracking(gt, tracks, args.threshold)
+    pair = files(args.gt, args.tracks)
+    tracking = score_tracking(pair, args.threshold)
     print(tracking_table(tracking))
-    ignored = int(gt.ignore.sum())
-    print(f"{tracking['frames']} frames; {ignored} ground-truth rows ignored (occluded or out of range); "
+    print(f"{tracking['frames']} frames; {pair.gt_ignored} ground-truth rows ignored (occluded or out of range); "
           f"threshold {args.threshold:g} m")
     if args.json:
         Path(args.json).write_text(json.dumps({"tracking": tracking}, indent=2) + "\n")
     if args.motchallenge:
         out = Path(args.motchallenge)
         out.mkdir(parents=True, exist_ok=True)
-        frames = np.concatenate([gt.frame, tracks.frame])
-        first = int(frames.min()) if len(frames) else 0
-        write_motchallenge(out / "gt.txt", gt, groundtruth=True, first_frame=first)
-        write_motchallenge(out / "tracks.txt", tracks, groundtruth=False, first_frame=first)
+        first = pair.first_frame or 0
+        write_motchallenge(out / "gt.txt", pair.gt_chunks(), groundtruth=True, first_frame=first)
+        write_motchallenge(out / "tracks.txt", pair.track_chunks(), groundtruth=False, first_frame=first)
     return 0
 
 
@@ -94,7 +92,7 @@ def _cmd_report(args) -> int:
     from scenarios import load_scenario
     from scenarios.geometry import wall_segments
 
-    from .run import write_directory
+    from .outdir import write_directory
 
     run_dir = Path(args.run_dir)
     for name in ("scenario.yaml", "groundtruth.csv", "tracks.csv"):
@@ -140,7 +138,7 @@ def _cmd_scenario_keys(args) -> int:
 
 
 def _cmd_validate(args) -> int:
-    from .run import check_out_dir
+    from .outdir import check_out_dir
     from .crowd.validation import run_validation
 
     out = Path(args.out) if args.out else Path("runs") / f"validation-{time.strftime('%Y%m%d-%H%M%S')}"
@@ -244,7 +242,7 @@ def main(argv: list[str] | None = None) -> int:
     from evaluation.io import EvaluationInputError
     from scenarios import ScenarioError
 
-    from .run import RunDirError
+    from .outdir import RunDirError
 
     args = build_parser().parse_args(argv)
     with warnings.catch_warnings():  # restores the warning display on return

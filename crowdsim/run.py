@@ -1,15 +1,15 @@
 """``crowdsim run``: simulate a scenario, score the tracker, and write the run directory.
 
-Outputs are written into a fresh temporary directory beside the target and moved into place only when complete,
-so an interrupted or failed run leaves nothing half-written, and an existing non-empty directory is never touched.
+Outputs are written into a temporary directory moved into place only when complete (crowdsim/outdir.py), so an
+interrupted or failed run leaves nothing half-written, and an existing non-empty directory is never touched. The
+run's memory does not grow with its length: its CSVs stream to disk as the frames come, they are scored from disk in
+chunks (evaluation/score.py), and the top-down picture keeps at most ``PICTURE_SECONDS`` worth of cycles.
 """
 
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import tempfile
+import math
 import time
 from pathlib import Path
 
@@ -17,12 +17,13 @@ import numpy as np
 import yaml
 from tqdm import tqdm
 
-from evaluation.io import load_sequence
-from pipeline.frames import compose, inverse
 from evaluation.score import score_tracking, tracking_table
+from evaluation.stream import CsvPair
+from pipeline.frames import compose, inverse
 from scenarios.geometry import wall_segments
 
 from .loop import Simulation
+from .outdir import check_out_dir, write_directory
 
 CSV_HEADER = "frame,t,id,x,y,vx,vy"
 # the ground truth adds, per person, the true distance from the robot, whether within the evaluation's range, the
@@ -36,17 +37,12 @@ ROBOT_HEADER = "frame,t,x,y,yaw,odom_x,odom_y,odom_yaw"
 # them or the camera's visible share of them (amount), whether in view, and whether in view but unseen (occluded);
 # t is the sensor frame's own time, frame the tracking cycle that delivered it
 VISIBILITY_HEADER = "frame,t,id,sensor,amount,in_view,occluded"
+VISIBILITY_FORMAT = ["%d", "%.2f", "%d", "%s", "%.4g", "%d", "%d"]
 CROWD_EVERY = 5  # tracking cycles between the crowd snapshots drawn in the top-down picture
-
-
-class RunDirError(ValueError):
-    pass
-
-
-def check_out_dir(out: Path) -> None:
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise RunDirError(f"--out {out}: already exists and is not empty; expected a new or empty directory "
-                          f"(nothing was written)")
+# the top-down picture draws every cycle of a run this long or shorter, and every k-th cycle of a run k times as
+# long, so it holds at most this much of the run
+PICTURE_SECONDS = 120.0
+BLOCK_ROWS = 1 << 14  # rows a CSV gathers before they are written
 
 
 def _rows(frame_index: int, stamp: float, persons) -> np.ndarray:
@@ -100,18 +96,65 @@ def _visibility_rows(frame, written: dict[str, float]) -> list[np.ndarray]:
     return out
 
 
-def write_visibility(path: Path, rows: list[np.ndarray], sensors: list[str]) -> None:
-    table = (np.concatenate(rows) if rows else np.zeros((0, 7))).astype(object)
-    table[:, 3] = np.array(sensors, object)[table[:, 3].astype(int)]
-    np.savetxt(path, table, fmt=["%d", "%.2f", "%d", "%s", "%.4g", "%d", "%d"], delimiter=",",
-               header=VISIBILITY_HEADER, comments="")
+class CsvWriter:
+    """A CSV written as its rows come, a block at a time (the bytes are those ``np.savetxt`` of all rows at once
+    would write). ``names``: for a column of indices, the names written in their place."""
+
+    def __init__(self, path: Path, header: str, fmt: list[str] | None = None, names: dict[int, list[str]] = None):
+        self.file = open(path, "w")
+        self.file.write(header + "\n")
+        self.fmt = fmt or ["%d", "%.2f"] + ["%d" if name in INTEGER_COLUMNS else "%.4f"
+                                            for name in header.split(",")[2:]]
+        self.names = {column: np.array(values, object) for column, values in (names or {}).items()}
+        self.block: list[np.ndarray] = []
+        self.rows = 0
+
+    def write(self, rows: np.ndarray) -> None:
+        self.block.append(rows)
+        self.rows += len(rows)
+        if self.rows >= BLOCK_ROWS:
+            self.flush()
+
+    def flush(self) -> None:
+        if self.block:
+            table = np.concatenate(self.block)
+            if self.names:
+                table = table.astype(object)
+                for column, names in self.names.items():
+                    table[:, column] = names[table[:, column].astype(int)]
+            np.savetxt(self.file, table, fmt=self.fmt, delimiter=",")
+        self.block, self.rows = [], 0
+
+    def close(self) -> None:
+        self.flush()
+        self.file.close()
 
 
-def write_csv(path: Path, rows: list[np.ndarray], header: str = CSV_HEADER) -> None:
-    columns = header.count(",") + 1
-    data = np.concatenate(rows) if rows else np.zeros((0, columns))
-    fmt = ["%d", "%.2f"] + ["%d" if name in INTEGER_COLUMNS else "%.4f" for name in header.split(",")[2:]]
-    np.savetxt(path, data, fmt=fmt, delimiter=",", header=header, comments="")
+class Picture:
+    """What the top-down picture draws, kept for every ``stride``-th cycle: ground truth and tracks as world-frame
+    rows (frame, id, x, y), the robot's path, and every few cycles the whole crowd (id, x, y)."""
+
+    def __init__(self, stride: int):
+        self.stride = stride
+        self.gt, self.tracks, self.robot, self.crowd = [], [], [], []
+
+    def add(self, frame) -> None:
+        if frame.index % self.stride:
+            return
+        self.gt.append(_world_rows(frame.index, frame.groundtruth, frame.world_T_odom))
+        self.tracks.append(_world_rows(frame.index, frame.tracks, frame.world_T_odom))
+        self.robot.append(frame.robot_pose)
+        if frame.index % (CROWD_EVERY * self.stride) == 0:  # everyone, in range or not
+            self.crowd.append(np.column_stack([frame.agents.id, frame.agents.position]))
+
+
+def _world_rows(index: int, persons, world_T_odom: np.ndarray) -> np.ndarray:
+    """(frame, id, x, y) of persons in odom, moved to the world with the cycle's true transform."""
+    w = world_T_odom
+    c, s = np.cos(w[2]), np.sin(w[2])
+    x, y = persons.position[:, 0], persons.position[:, 1]
+    return np.column_stack([np.full(len(persons), index), persons.track_id, w[0] + c * x - s * y,
+                            w[1] + s * x + c * y])
 
 
 def summary_table(metrics: dict) -> str:
@@ -129,36 +172,6 @@ def cameras_line(metrics: dict, before: str = "") -> str:
                    for backend, names in by_renderer.items())
 
 
-def write_directory(out: Path, write):
-    """Call ``write(tmp)`` to fill a fresh temporary directory beside ``out`` and move it into place only when
-    complete: a failure leaves nothing half-written, and an existing non-empty ``out`` is never touched.
-    Returns what ``write`` returns."""
-    out = Path(out)
-    check_out_dir(out)
-    made = [p for p in reversed(out.absolute().parents) if not p.exists()]  # parents this creates
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = None
-    try:
-        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
-        umask = os.umask(0)
-        os.umask(umask)
-        tmp.chmod(0o777 & ~umask)  # mkdtemp makes it private; the finished directory is an ordinary one
-        result = write(tmp)
-        if out.exists():
-            out.rmdir()  # checked empty above
-        tmp.rename(out)
-    except BaseException:
-        if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
-        for parent in reversed(made):
-            try:
-                parent.rmdir()
-            except OSError:
-                break
-        raise
-    return result
-
-
 def run(scenario: dict, out: Path, rrd: bool = False, progress: bool = True) -> dict:
     """Simulate, score and write ``out``; return metrics.json's content."""
     return write_directory(out, lambda tmp: _simulate(scenario, tmp, rrd, progress))
@@ -173,52 +186,57 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     sim.warm_up()
     warmup_s = time.perf_counter() - start
     recording = Recording(tmp / "recording.rrd", wall_segments(scenario), sim) if rrd else None
-    gt_rows, track_rows, detection_rows, robot_rows, counts, robot_path, odom, crowd = [], [], [], [], [], [], [], []
-    visibility_rows, written = [], {}
+    sensors = [laser.name for laser in sim.lasers] + [camera.name for camera in (*sim.depth_cameras,
+                                                                                 *sim.wall_cameras)]
+    csv = {"groundtruth": CsvWriter(tmp / "groundtruth.csv", GT_HEADER),
+           "tracks": CsvWriter(tmp / "tracks.csv", CSV_HEADER),
+           "detections": CsvWriter(tmp / "detections.csv", DETECTIONS_HEADER),
+           "robot": CsvWriter(tmp / "robot.csv", ROBOT_HEADER),
+           "visibility": CsvWriter(tmp / "visibility.csv", VISIBILITY_HEADER, VISIBILITY_FORMAT, {3: sensors})}
     duration = scenario["duration"]
+    picture = Picture(max(1, math.ceil(duration / PICTURE_SECONDS - 1e-9)))
+    written: dict[str, float] = {}
+    frames, persons, most = 0, 0, 0  # tracking cycles; persons in range summed over them, and at most
     bar = tqdm(total=round(duration, 2), unit="sim s", disable=not progress, desc=scenario["name"],
                bar_format="{l_bar}{bar}| {n:.1f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
     t0 = sim.crowd.t
-    for frame in sim.frames(duration):
-        gt_rows.append(_gt_rows(frame))
-        track_rows.append(_rows(frame.index, frame.stamp, frame.tracks))
-        detection_rows.append(_detection_rows(frame))
-        robot_rows.append(_robot_row(frame))
-        visibility_rows += _visibility_rows(frame, written)
-        counts.append(int(frame.gt_tags.in_range.sum()))
-        robot_path.append(frame.robot_pose)
-        odom.append(frame.world_T_odom)
-        if frame.index % CROWD_EVERY == 0:  # everyone, in range or not, for the picture
-            crowd.append(np.column_stack([frame.agents.id, frame.agents.position]))
-        if recording:
-            recording.log(frame)
-            recording.log_images(frame)
-        bar.update(round(frame.stamp - t0, 2) - bar.n)
-    bar.close()
+    try:
+        for frame in sim.frames(duration):
+            csv["groundtruth"].write(_gt_rows(frame))
+            csv["tracks"].write(_rows(frame.index, frame.stamp, frame.tracks))
+            csv["detections"].write(_detection_rows(frame))
+            csv["robot"].write(_robot_row(frame))
+            for rows in _visibility_rows(frame, written):
+                csv["visibility"].write(rows)
+            in_range = int(frame.gt_tags.in_range.sum())
+            frames, persons, most = frames + 1, persons + in_range, max(most, in_range)
+            picture.add(frame)
+            if recording:
+                recording.log(frame)
+                recording.log_images(frame)
+            bar.update(round(frame.stamp - t0, 2) - bar.n)
+    finally:
+        bar.close()
+        for writer in csv.values():
+            writer.close()
     if recording:
         recording.close()
     timing = sim.timing
-    write_csv(tmp / "groundtruth.csv", gt_rows, GT_HEADER)
-    write_csv(tmp / "tracks.csv", track_rows)
-    write_csv(tmp / "detections.csv", detection_rows, DETECTIONS_HEADER)
-    write_csv(tmp / "robot.csv", robot_rows, ROBOT_HEADER)
-    write_visibility(tmp / "visibility.csv", visibility_rows, [laser.name for laser in sim.lasers]
-                     + [camera.name for camera in (*sim.depth_cameras, *sim.wall_cameras)])
     # the scenario as run, every default filled in: a scenario file that runs again as it is
     resolved = _without_unset({key: value for key, value in scenario.items() if key != "source"})
     (tmp / "scenario.yaml").write_text(f"# resolved from {scenario['source']}\n"
                                        + yaml.safe_dump(resolved, sort_keys=False))
     # scored from the files as written, so that `crowdsim evaluate` on them gives the same figures
-    tracking = score_tracking(load_sequence(tmp / "groundtruth.csv"), load_sequence(tmp / "tracks.csv", False),
+    tracking = score_tracking(CsvPair(tmp / "groundtruth.csv", tmp / "tracks.csv"),
                               scenario["evaluation"]["threshold"])
     metrics = {
         "scenario": scenario["name"],
         "seed": scenario["seed"],
         "duration_s": duration,
-        "frames": len(counts),  # tracking cycles (tracking.frames: those with any ground truth or track)
+        "frames": frames,  # tracking cycles (tracking.frames: those with any ground truth or track)
         "tracking": tracking,
-        "groundtruth": {"mean_persons_in_range": float(np.mean(counts)) if counts else 0.0,
-                        "max_persons_in_range": int(max(counts)) if counts else 0},
+        "groundtruth": {"mean_persons_in_range": persons / frames if frames else 0.0,
+                        "max_persons_in_range": most},
         # which renderer drew each camera: egl or osmesa (MuJoCo's OpenGL), or raycast where no GL context was had
         "cameras": {camera.name: camera.backend for camera in (*sim.depth_cameras, *sim.wall_cameras)},
         "timing": {
@@ -238,8 +256,5 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         f"{metrics['groundtruth']['mean_persons_in_range']:.1f} on average, "
         f"{metrics['groundtruth']['max_persons_in_range']} at most.{cameras_line(metrics, ' ')}\n\n"
         "![top-down view](topdown.png)\n")
-    plot_run(tmp / "topdown.png", wall_segments(scenario), np.concatenate(gt_rows) if gt_rows else np.zeros((0, 7)),
-             np.concatenate(track_rows) if track_rows else np.zeros((0, 7)), np.array(robot_path),
-             np.array(odom), np.concatenate(crowd) if crowd else np.zeros((0, 3)),
-             f"{scenario['name']}, seed {scenario['seed']}")
+    plot_run(tmp / "topdown.png", wall_segments(scenario), picture, f"{scenario['name']}, seed {scenario['seed']}")
     return metrics

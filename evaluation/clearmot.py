@@ -45,6 +45,10 @@ Beyond MOTA and MOTP (``summary``):
 Choices: the threshold is inclusive (a distance equal to it is a match) in both steps. Non-finite positions never
 match. Ids must be unique within a frame. With no ground truth at all, MOTA, fp_rate and miss_rate are ``None``
 (undefined, and NaN is not JSON); with no matches MOTP is ``None``.
+
+Memory: the state grows with the persons and hypotheses seen (per person: frames counted, frames matched, matched
+runs; per pair of a person and a hypothesis ever within the threshold: frames together), never with the frames, so
+a run of any length is scored as it streams.
 """
 
 from __future__ import annotations
@@ -56,6 +60,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
 from .sequence import Sequence, frames_of
+from .tables import Slots, grown, pair_key, split_pair_key
 
 __all__ = ["ClearMot", "FrameResult", "evaluate"]
 
@@ -138,10 +143,14 @@ class ClearMot:
         self._hyp_key = self._hyp_gt = _EMPTY_I
         self._frames = self._gt = self._matches = self._fp = self._fn = self._ids = self._swaps = 0
         self._dist_sum = 0.0
-        # per frame, for the trajectory and identity measures at the end
-        self._counted_ids, self._counted_matched, self._counted_frame = [], [], []
-        self._pair_gt, self._pair_hyp = [], []
         self._hyps = 0
+        self._last_frame: int | None = None  # the frame number last scored by ``score_frames``
+        # Per counted person (a slot): frames counted, frames matched, matched runs, matched in their last counted
+        # frame; per pair of a counted person and a counted hypothesis: frames within the threshold (IDF1).
+        self._persons, self._hyp_slots, self._pairs = Slots(), Slots(), Slots()
+        self._counted = self._matched = self._runs = np.zeros(0, np.int64)
+        self._was_matched = np.zeros(0, bool)
+        self._together = np.zeros(0, np.int64)
 
     def update(self, gt_ids: np.ndarray, gt_pos: np.ndarray, hyp_ids: np.ndarray, hyp_pos: np.ndarray,
                gt_ignore: np.ndarray | None = None) -> FrameResult:
@@ -158,7 +167,6 @@ class ClearMot:
     def _update(self, gt_ids, gt_pos, ignore, hyp_ids, hyp_pos) -> FrameResult:
         n, m = gt_ids.size, hyp_ids.size
         thr = self.threshold
-        frame = self._frames
         dist = cdist(gt_pos, hyp_pos) if n and m else np.zeros((n, m))
 
         # Step 1: keep last frame's correspondences that are still present and within the threshold.
@@ -237,48 +245,43 @@ class ClearMot:
         self._dist_sum += float(md.sum())
         self._hyps += m_counted
 
-        # For the trajectory measures: every counted person and whether matched; for IDF1: every pair of a counted
-        # person and a counted hypothesis within the threshold.
-        matched = np.zeros(n, bool)
-        matched[mg] = True
-        self._counted_ids.append(gt_ids[counted])
-        self._counted_matched.append(matched[counted])
-        self._counted_frame.append(np.full(n_counted, frame, np.int64))
+        self._count_trajectories(gt_ids[counted], np.isin(counted, mg))
         if n_counted and m_counted:
             r, c = np.nonzero((dist <= thr) & ~ignore[:, None] & hyp_counted)
-            self._pair_gt.append(gt_ids[r])
-            self._pair_hyp.append(hyp_ids[c])
+            pairs = self._pairs(pair_key(self._persons(gt_ids[r]), self._hyp_slots(hyp_ids[c])))
+            self._together = grown(self._together, len(self._pairs))
+            np.add.at(self._together, pairs, 1)
         return res
+
+    def _count_trajectories(self, ids: np.ndarray, matched: np.ndarray) -> None:
+        """One frame of the counted persons ``ids`` and whether each was matched: a matched run starts where a
+        person is matched after an unmatched counted frame (or in their first)."""
+        slot = self._persons(ids)
+        n = len(self._persons)
+        self._counted, self._matched, self._runs = (grown(a, n) for a in (self._counted, self._matched, self._runs))
+        self._was_matched = grown(self._was_matched, n)
+        self._counted[slot] += 1
+        self._matched[slot] += matched
+        self._runs[slot] += matched & ~self._was_matched[slot]
+        self._was_matched[slot] = matched
 
     def _trajectories(self) -> dict:
         """MT, PT, ML and fragmentations of the ground-truth persons over the frames they count in."""
-        if not self._counted_ids:
-            return {"mt": 0, "pt": 0, "ml": 0, "fragmentations": 0, "persons": 0}
-        ids = np.concatenate(self._counted_ids)
-        matched = np.concatenate(self._counted_matched)
-        frame = np.concatenate(self._counted_frame)
-        order = np.lexsort((frame, ids))
-        ids, matched = ids[order], matched[order]
-        persons, start, length = np.unique(ids, return_index=True, return_counts=True)
-        ratio = np.add.reduceat(matched.astype(np.int64), start) / length if len(ids) else np.zeros(0)
-        # a matched run starts where a person's matched flag rises (or their first frame is matched)
-        first = np.zeros(len(ids), bool)
-        first[start] = True
-        rise = matched & (first | ~np.roll(matched, 1))
-        runs = np.add.reduceat(rise.astype(np.int64), start) if len(ids) else np.zeros(0, np.int64)
+        n = len(self._persons)
+        ratio = self._matched[:n] / self._counted[:n]
         return {"mt": int((ratio > 0.8).sum()), "pt": int(((ratio >= 0.2) & (ratio <= 0.8)).sum()),
-                "ml": int((ratio < 0.2).sum()), "fragmentations": int(np.maximum(runs - 1, 0).sum()),
-                "persons": int(len(persons))}
+                "ml": int((ratio < 0.2).sum()), "fragmentations": int(np.maximum(self._runs[:n] - 1, 0).sum()),
+                "persons": n}
 
     def _identity(self) -> dict:
         """IDF1, IDP, IDR: the best one-to-one assignment of gt ids to hypothesis ids over the sequence."""
         idtp = 0
-        if self._pair_gt:
-            g, h = np.concatenate(self._pair_gt), np.concatenate(self._pair_hyp)
+        if len(self._pairs):
+            g, h = split_pair_key(self._pairs.keys)
             gu, gi = np.unique(g, return_inverse=True)
             hu, hi = np.unique(h, return_inverse=True)
             counts = np.zeros((gu.size, hu.size))
-            np.add.at(counts, (gi, hi), 1.0)
+            counts[gi, hi] = self._together[:len(self._pairs)]
             r, c = linear_sum_assignment(counts, maximize=True)
             idtp = int(counts[r, c].sum())
         gt, hyps = self._gt, self._hyps
@@ -320,7 +323,8 @@ def evaluate(gt: Sequence, tracks: Sequence, threshold: float = 1.0) -> dict:
 
 
 def score_frames(gt: Sequence, tracks: Sequence, cm: ClearMot):
-    """Feed ``cm`` frame by frame; yield each frame number with its FrameResult."""
+    """Feed ``cm`` frame by frame (a chunk of a longer sequence too: ``cm`` remembers the last frame it scored);
+    yield each frame number with its FrameResult."""
     for name, seq in (("ground truth", gt), ("tracks", tracks)):
         dup = (np.diff(seq.frame) == 0) & (np.diff(seq.id) == 0) if len(seq) > 1 else _EMPTY_B
         if dup.any():
@@ -328,8 +332,9 @@ def score_frames(gt: Sequence, tracks: Sequence, cm: ClearMot):
             raise ValueError(f"{name}: id {seq.id[k]} appears twice in frame {seq.frame[k]}")
     frames = frames_of(gt, tracks)
     gb, tb = gt.bounds(frames), tracks.bounds(frames)
-    for k in range(len(frames)):
-        if k and frames[k] != frames[k - 1] + 1:  # a frame without rows between: nothing was matched in it
-            cm._prev_gt = cm._prev_hyp = _EMPTY_I
+    for k, frame in enumerate(frames.tolist()):
+        if cm._last_frame is not None and frame != cm._last_frame + 1:
+            cm._prev_gt = cm._prev_hyp = _EMPTY_I  # a frame without rows between: nothing was matched in it
+        cm._last_frame = frame
         g, t = slice(gb[k], gb[k + 1]), slice(tb[k], tb[k + 1])
-        yield int(frames[k]), cm._update(gt.id[g], gt.position[g], gt.ignore[g], tracks.id[t], tracks.position[t])
+        yield frame, cm._update(gt.id[g], gt.position[g], gt.ignore[g], tracks.id[t], tracks.position[t])

@@ -40,14 +40,14 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from evaluation.sequence import Sequence, frames_of
+from evaluation.tables import Slots, grown, pair_key, split_pair_key
 
-__all__ = ["hota", "ALPHAS", "close_pairs", "max_weight_matching", "check_ids"]
+__all__ = ["Hota", "hota", "ALPHAS", "same_frame_pairs", "close_pairs", "max_weight_matching", "check_ids"]
 
 ALPHAS = np.arange(1, 20) / 20  # 0.05 ... 0.95
 _TOL = 1e-12  # a similarity this close below alpha still counts (rounding of d / scale)
 _CHUNK = 1 << 20  # candidate pairs generated at once (memory bound)
 _EMPTY_I = np.zeros(0, np.int64)
-_DENSE = 1 << 22  # largest (gt ids x track ids) table counted densely
 
 
 def check_ids(seq: Sequence, name: str) -> None:
@@ -59,21 +59,17 @@ def check_ids(seq: Sequence, name: str) -> None:
             raise ValueError(f"{name} ids must be unique within a frame")
 
 
-def close_pairs(gt: Sequence, tracks: Sequence, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every (gt row, track row) of the same frame closer than ``radius`` (strictly; never for non-finite
-    positions), with its distance, sorted by gt row then track row (so also by frame)."""
+def same_frame_pairs(gt: Sequence, tracks: Sequence):
+    """Every (gt row, track row) of the same frame, sorted by gt row then track row (so also by frame), in batches
+    of about ``_CHUNK`` pairs (memory bound): an iterator of (gt rows, track rows)."""
     if not len(gt) or not len(tracks):
-        return _EMPTY_I, _EMPTY_I, np.zeros(0)
+        return
     frames = frames_of(gt, tracks)
     tb = tracks.bounds(frames)
     k = np.searchsorted(frames, gt.frame)
     t0 = tb[k]
     cnt = tb[k + 1] - t0  # track rows in each gt row's frame
     ends = np.cumsum(cnt)
-    gx, gy = gt.position[:, 0], gt.position[:, 1]
-    tx, ty = tracks.position[:, 0], tracks.position[:, 1]
-    r2 = radius * radius * (1.0 + 1e-9)  # cheap pre-filter on squared distance, exact test below
-    out_g, out_t, out_d = [], [], []
     lo, n = 0, len(gt)
     while lo < n:
         base = int(ends[lo - 1]) if lo else 0
@@ -82,20 +78,25 @@ def close_pairs(gt: Sequence, tracks: Sequence, radius: float) -> tuple[np.ndarr
         total = int(ends[hi - 1]) - base
         if total:
             # Track row = first track row of the frame + offset within this gt row's block.
-            ti = np.arange(total) + np.repeat(t0[lo:hi] - (ends[lo:hi] - c - base), c)
-            dx = np.repeat(gx[lo:hi], c) - tx[ti]
-            dy = np.repeat(gy[lo:hi], c) - ty[ti]
-            d2 = dx * dx + dy * dy
-            near = np.flatnonzero(d2 < r2)
-            d = np.sqrt(d2[near])
-            ok = d < radius
-            near = near[ok]
-            out_g.append(lo + np.searchsorted(ends[lo:hi] - base, near, side="right"))
-            out_t.append(ti[near])
-            out_d.append(d[ok])
+            yield np.repeat(np.arange(lo, hi), c), np.arange(total) + np.repeat(t0[lo:hi] - (ends[lo:hi] - c - base), c)
         lo = hi
-    if not out_g:
-        return _EMPTY_I, _EMPTY_I, np.zeros(0)
+
+
+def close_pairs(gt: Sequence, tracks: Sequence, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every (gt row, track row) of the same frame closer than ``radius`` (strictly; never for non-finite
+    positions), with its distance, sorted by gt row then track row (so also by frame)."""
+    r2 = radius * radius * (1.0 + 1e-9)  # cheap pre-filter on squared distance, exact test below
+    out_g, out_t, out_d = [_EMPTY_I], [_EMPTY_I], [np.zeros(0)]
+    for gi, ti in same_frame_pairs(gt, tracks):
+        dx = gt.position[gi, 0] - tracks.position[ti, 0]
+        dy = gt.position[gi, 1] - tracks.position[ti, 1]
+        d2 = dx * dx + dy * dy
+        near = np.flatnonzero(d2 < r2)
+        d = np.sqrt(d2[near])
+        ok = d < radius
+        out_g.append(gi[near[ok]])
+        out_t.append(ti[near[ok]])
+        out_d.append(d[ok])
     return np.concatenate(out_g), np.concatenate(out_t), np.concatenate(out_d)
 
 
@@ -147,74 +148,105 @@ def _jsonable(a) -> list:
     return [None if x is None else float(x) for x in a]
 
 
+def _scale(scale: float) -> float:
+    scale = float(scale)
+    if not np.isfinite(scale) or scale <= 0.0:
+        raise ValueError("scale must be finite and > 0")
+    return scale
+
+
+class Hota:
+    """HOTA over a sequence given as chunks of whole frames in frame order, in two passes over the same chunks
+    (steps 1 and 2-3 of the module docstring): ``count`` every chunk, ``align``, ``match`` every chunk again,
+    ``result``. The state is per gt id, per track id and per (gt id, track id) pair ever closer than ``scale``;
+    sums are taken in frame order, so the figures do not depend on where the chunks are cut."""
+
+    def __init__(self, scale: float = 2.0):
+        self.scale = _scale(scale)
+        self.gt_ids, self.track_ids, self.pairs = Slots(), Slots(), Slots()
+        self.n_g = self.n_t = np.zeros(0, np.int64)  # frames each gt (track) id is present in
+        self.potential = np.zeros(0)  # soft count of potential matches per pair
+        self.alignment = None
+        self.hits = np.zeros((0, ALPHAS.size + 1), np.int64)  # per pair: matches by the number of alphas <= S
+        self.loc_sum = np.zeros(ALPHAS.size + 1)  # summed S of the matches, by the same number
+        self.gt_points = self.track_points = 0
+
+    def _close(self, gt: Sequence, tracks: Sequence, add: bool):
+        """The chunk's close pairs with their similarity and pair slot."""
+        check_ids(gt, "gt")
+        check_ids(tracks, "tracks")
+        gi, ti, d = close_pairs(gt, tracks, self.scale)
+        g, t = self.gt_ids(gt.id, add), self.track_ids(tracks.id, add)
+        return gi, ti, 1.0 - d / self.scale, self.pairs(pair_key(g[gi], t[ti]), add), g, t
+
+    def count(self, gt: Sequence, tracks: Sequence) -> None:
+        """Pass 1 (step 1): presence per id and the soft count of potential matches per pair."""
+        gi, ti, s, pair, g, t = self._close(gt, tracks, add=True)
+        self.n_g, self.n_t = grown(self.n_g, len(self.gt_ids)), grown(self.n_t, len(self.track_ids))
+        np.add.at(self.n_g, g, 1)
+        np.add.at(self.n_t, t, 1)
+        row = np.bincount(gi, s, minlength=len(gt))
+        col = np.bincount(ti, s, minlength=len(tracks))
+        self.potential = grown(self.potential, len(self.pairs))
+        np.add.at(self.potential, pair, s / (row[gi] + col[ti] - s))  # in frame order, as one bincount would
+
+    def align(self) -> None:
+        """Between the passes: the global alignment score A of every pair."""
+        g, t = split_pair_key(self.pairs.keys)
+        pot = self.potential[:len(self.pairs)]
+        with np.errstate(invalid="ignore"):
+            self.alignment = pot / (self.n_g[g] + self.n_t[t] - pot)
+        self.hits = np.zeros((len(self.pairs), ALPHAS.size + 1), np.int64)
+
+    def match(self, gt: Sequence, tracks: Sequence) -> None:
+        """Pass 2 (steps 2-3): one matching per frame on A * S, and the matches counted per pair and alpha."""
+        gi, ti, s, pair, _, _ = self._close(gt, tracks, add=False)
+        m = max_weight_matching(gi, ti, self.alignment[pair] * s, gt.frame[gi])
+        sm = s[m]
+        k = np.searchsorted(ALPHAS - _TOL, sm, side="right")  # a match is a TP at the first k alphas
+        np.add.at(self.hits, (pair[m], k), 1)
+        np.add.at(self.loc_sum, k, sm)
+        self.gt_points += len(gt)
+        self.track_points += len(tracks)
+
+    def result(self) -> dict:
+        """HOTA, DetA, AssA, LocA (see ``hota``)."""
+        na = ALPHAS.size
+        per = {"alpha": [round(float(a), 2) for a in ALPHAS]}
+        if not self.gt_points and not self.track_points:
+            none = [None] * na
+            per.update(hota=none, deta=none, assa=none, loca=none, tp=[0] * na, fn=[0] * na, fp=[0] * na)
+            return {"hota": None, "deta": None, "assa": None, "loca": None, "per_alpha": per}
+        used = np.flatnonzero(self.hits.any(axis=1))
+        g, t = split_pair_key(self.pairs.keys[used])
+        order = np.lexsort((self.track_ids.keys[t], self.gt_ids.keys[g]))  # by (gt id, track id)
+        used, g, t = used[order], g[order], t[order]
+        tpa = np.cumsum(self.hits[used][:, ::-1], axis=1)[:, ::-1][:, 1:]  # [pairs, alpha]: TPs per id pair
+        tp = tpa.sum(axis=0)
+        loc_sum = np.cumsum(self.loc_sum[::-1])[::-1][1:]
+        ass_sum = (tpa * tpa / ((self.n_g[g] + self.n_t[t])[:, None] - tpa)).sum(axis=0)
+        fn = self.gt_points - tp
+        fp = self.track_points - tp
+        has = tp > 0
+        deta = tp / (tp + fn + fp)
+        assa = np.where(has, ass_sum / np.maximum(tp, 1), 0.0)
+        loca = np.where(has, loc_sum / np.maximum(tp, 1), 1.0)
+        h = np.sqrt(deta * assa)
+        any_tp = bool(has.any())
+        per.update(hota=_jsonable(h), deta=_jsonable(deta),
+                   assa=_jsonable(assa) if any_tp else [None] * na, loca=_jsonable(loca) if any_tp else [None] * na,
+                   tp=tp.tolist(), fn=fn.tolist(), fp=fp.tolist())
+        return {"hota": float(h.mean()), "deta": float(deta.mean()),
+                "assa": float(assa.mean()) if any_tp else None, "loca": float(loca.mean()) if any_tp else None,
+                "per_alpha": per}
+
+
 def hota(gt: Sequence, tracks: Sequence, scale: float = 2.0) -> dict:
     """HOTA, DetA, AssA, LocA of ``tracks`` against ``gt`` (see module docstring), as plain JSON-serialisable values:
     ``hota``, ``deta``, ``assa``, ``loca`` (means over alpha) and ``per_alpha`` (lists ``alpha``, ``hota``, ``deta``,
     ``assa``, ``loca``, ``tp``, ``fn``, ``fp``). ``scale``: distance (m) at which the similarity reaches 0."""
-    scale = float(scale)
-    if not np.isfinite(scale) or scale <= 0.0:
-        raise ValueError("scale must be finite and > 0")
-    check_ids(gt, "gt")
-    check_ids(tracks, "tracks")
-    na = ALPHAS.size
-    per = {"alpha": [round(float(a), 2) for a in ALPHAS]}
-    if not len(gt) and not len(tracks):
-        none = [None] * na
-        per.update(hota=none, deta=none, assa=none, loca=none, tp=[0] * na, fn=[0] * na, fp=[0] * na)
-        return {"hota": None, "deta": None, "assa": None, "loca": None, "per_alpha": per}
-
-    g_ids, g_idx = np.unique(gt.id, return_inverse=True)
-    t_ids, t_idx = np.unique(tracks.id, return_inverse=True)
-    g_idx, t_idx = g_idx.reshape(-1), t_idx.reshape(-1)
-    n_t_ids = max(t_ids.size, 1)
-    n_g = np.bincount(g_idx, minlength=g_ids.size)  # frames each gt id is present in
-    n_t = np.bincount(t_idx, minlength=n_t_ids)
-
-    gi, ti, d = close_pairs(gt, tracks, scale)
-    s = 1.0 - d / scale  # > 0 for every listed pair; all other pairs have S = 0
-
-    # 1. Global alignment score A of every (gt id, track id) that ever has S > 0.
-    row = np.bincount(gi, s, minlength=len(gt))
-    col = np.bincount(ti, s, minlength=len(tracks))
-    soft = s / (row[gi] + col[ti] - s)
-    key = g_idx[gi] * n_t_ids + t_idx[ti]
-    if g_ids.size * n_t_ids <= _DENSE:  # count by id pair in a dense table: no sort
-        inv, n_keys = key, g_ids.size * n_t_ids
-    else:
-        inv = np.unique(key, return_inverse=True)[1].reshape(-1)
-        n_keys = int(inv.max()) + 1 if inv.size else 0
-    keys = np.zeros(n_keys, np.int64)
-    keys[inv] = key
-    kg, kt = keys // n_t_ids, keys % n_t_ids
-    pot = np.bincount(inv, soft, minlength=n_keys)
-    with np.errstate(invalid="ignore"):  # 0 / 0 for id pairs never close: unused
-        align = pot / (n_g[kg] + n_t[kt] - pot)
-
-    # 2. One matching per frame on A * S.
-    m = max_weight_matching(gi, ti, align[inv] * s, gt.frame[gi])
-
-    # 3. Per alpha. A matched pair with similarity S is a TP at the first k alphas, k = number of alphas <= S.
-    sm = s[m]
-    k = np.searchsorted(ALPHAS - _TOL, sm, side="right")
-    pk, pinv = np.unique(inv[m], return_inverse=True)
-    pinv = pinv.reshape(-1)
-    hist = np.bincount(pinv * (na + 1) + k, minlength=pk.size * (na + 1)).reshape(pk.size, na + 1)
-    tpa = np.cumsum(hist[:, ::-1], axis=1)[:, ::-1][:, 1:]  # [pairs, alpha]: TPs of each id pair at each alpha
-    tp = tpa.sum(axis=0)
-    loc_sum = np.cumsum(np.bincount(k, sm, minlength=na + 1)[::-1])[::-1][1:]
-    ass_sum = (tpa * tpa / ((n_g[kg[pk]] + n_t[kt[pk]])[:, None] - tpa)).sum(axis=0)
-    fn = len(gt) - tp
-    fp = len(tracks) - tp
-    has = tp > 0
-    deta = tp / (tp + fn + fp)
-    assa = np.where(has, ass_sum / np.maximum(tp, 1), 0.0)
-    loca = np.where(has, loc_sum / np.maximum(tp, 1), 1.0)
-    h = np.sqrt(deta * assa)
-
-    any_tp = bool(has.any())
-    per.update(hota=_jsonable(h), deta=_jsonable(deta),
-               assa=_jsonable(assa) if any_tp else [None] * na, loca=_jsonable(loca) if any_tp else [None] * na,
-               tp=tp.tolist(), fn=fn.tolist(), fp=fp.tolist())
-    return {"hota": float(h.mean()), "deta": float(deta.mean()),
-            "assa": float(assa.mean()) if any_tp else None, "loca": float(loca.mean()) if any_tp else None,
-            "per_alpha": per}
+    h = Hota(scale)
+    h.count(gt, tracks)
+    h.align()
+    h.match(gt, tracks)
+    return h.result()

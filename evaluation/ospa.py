@@ -63,44 +63,12 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
-from scipy.sparse import csr_matrix
 
-from evaluation.hota import check_ids, close_pairs, max_weight_matching
+from evaluation.hota import check_ids, close_pairs, max_weight_matching, same_frame_pairs
 from evaluation.sequence import Sequence, frames_of
+from evaluation.tables import ExactSum, Slots, grown, pair_key, split_pair_key
 
-__all__ = ["ospa", "track_labels"]
-
-
-def track_labels(gt: Sequence, tracks: Sequence, cutoff: float = 1.0, p: float = 1.0,
-                 pairs: tuple | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """OSPA-T step 1 (module docstring) over the whole sequence: (sorted track ids, the gt id each is assigned to,
-    whether it is assigned). ``pairs``: ``close_pairs(gt, tracks, cutoff)`` if already at hand. Dense in
-    (gt ids x track ids)."""
-    t_ids, t_idx = np.unique(tracks.id, return_inverse=True)
-    labels = np.zeros(t_ids.size, np.int64)
-    assigned = np.zeros(t_ids.size, bool)
-    if not len(gt) or not len(tracks):
-        return t_ids, labels, assigned
-    g_ids, g_idx = np.unique(gt.id, return_inverse=True)
-    g_idx, t_idx = g_idx.reshape(-1), t_idx.reshape(-1)
-    frames = frames_of(gt, tracks)
-    cp = cutoff ** p
-    # Frames in which both ids are present: presence (id x frame) products.
-    pg = csr_matrix((np.ones(len(gt)), (g_idx, np.searchsorted(frames, gt.frame))), shape=(g_ids.size, frames.size))
-    pt = csr_matrix((np.ones(len(tracks)), (t_idx, np.searchsorted(frames, tracks.frame))),
-                    shape=(t_ids.size, frames.size))
-    both = (pg @ pt.T).toarray()
-    # sum over frames = cp * (frames of l only + frames of r only + frames of both) - savings of the close pairs.
-    gi, ti, d = close_pairs(gt, tracks, cutoff) if pairs is None else pairs
-    saving = np.bincount(g_idx[gi] * t_ids.size + t_idx[ti], cp - d ** p,
-                         minlength=g_ids.size * t_ids.size).reshape(g_ids.size, t_ids.size)
-    n_g = np.bincount(g_idx, minlength=g_ids.size)
-    n_t = np.bincount(t_idx, minlength=t_ids.size)
-    cost = cp * (n_g[:, None] + n_t[None, :] - both) - saving
-    r, c = linear_sum_assignment(cost)
-    labels[c] = g_ids[r]
-    assigned[c] = True
-    return t_ids, labels, assigned
+__all__ = ["Ospa", "ospa"]
 
 
 def _per_frame(n: np.ndarray, m: np.ndarray, gain_sum: np.ndarray, cp: float, p: float):
@@ -111,54 +79,118 @@ def _per_frame(n: np.ndarray, m: np.ndarray, gain_sum: np.ndarray, cp: float, p:
     return total ** (1.0 / p), loc ** (1.0 / p)
 
 
+class Ospa:
+    """OSPA and OSPA-T over a sequence given as chunks of whole frames in frame order, in two passes over the same
+    chunks: ``count`` every chunk (plain OSPA, and what OSPA-T's labels need), ``label``, ``score`` every chunk
+    again (OSPA-T), ``result``. The state is per gt id, per track id and per (gt id, track id) pair ever present in
+    the same frame; the means over frames are exactly rounded sums, whatever the chunks."""
+
+    def __init__(self, c: float = 1.0, p: float = 1.0, label_penalty: float = 1.0):
+        self.c, self.p, self.alpha = float(c), float(p), float(label_penalty)
+        if not np.isfinite(self.c) or self.c <= 0.0:
+            raise ValueError("c must be finite and > 0")
+        if not np.isfinite(self.p) or self.p < 1.0:
+            raise ValueError("p must be finite and >= 1")
+        if not np.isfinite(self.alpha) or self.alpha < 0.0:
+            raise ValueError("label_penalty must be finite and >= 0")
+        self.cp = self.c ** self.p
+        self.sums = {name: ExactSum() for name in ("ospa", "localisation", "cardinality", "ospa_t")}
+        self.gt_ids, self.track_ids, self.pairs = Slots(), Slots(), Slots()
+        self.n_g = self.n_t = np.zeros(0, np.int64)  # frames each gt (track) id is present in
+        self.both = np.zeros(0, np.int64)  # frames each pair is present together
+        self.saving = np.zeros(0)  # per pair: the sum over frames of c^p - d^p where d < c
+        self.labels = self.assigned = None  # per track slot: the gt id it is labelled with, and whether it is
+
+    def _frames(self, gt: Sequence, tracks: Sequence):
+        """The chunk's frames, their set sizes n >= m, and its pairs closer than c with their frame index and d^p."""
+        check_ids(gt, "gt")
+        check_ids(tracks, "tracks")
+        frames = frames_of(gt, tracks)
+        ng, nt = np.diff(gt.bounds(frames)), np.diff(tracks.bounds(frames))
+        gi, ti, d = close_pairs(gt, tracks, self.c)
+        return frames, np.maximum(ng, nt), np.minimum(ng, nt), gi, ti, np.searchsorted(frames, gt.frame[gi]), d ** self.p
+
+    def count(self, gt: Sequence, tracks: Sequence) -> dict:
+        """Pass 1: plain OSPA per frame of the chunk (returned, and added to the means), and OSPA-T's step 1
+        statistics."""
+        frames, n, m, gi, ti, fr, dp = self._frames(gt, tracks)
+        cp, nf = self.cp, len(frames)
+        sel = max_weight_matching(gi, ti, cp - dp, fr)  # maximise the sum of c^p - d^p over pairs within c
+        o, loc = _per_frame(n, m, np.bincount(fr[sel], cp - dp[sel], minlength=nf), cp, self.p)
+        card = (cp * (n - m) / n) ** (1.0 / self.p)
+        for name, values in (("ospa", o), ("localisation", loc), ("cardinality", card)):
+            self.sums[name].add(values)
+        g, t = self.gt_ids(gt.id), self.track_ids(tracks.id)
+        self.n_g, self.n_t = grown(self.n_g, len(self.gt_ids)), grown(self.n_t, len(self.track_ids))
+        np.add.at(self.n_g, g, 1)
+        np.add.at(self.n_t, t, 1)
+        for pg, pt in same_frame_pairs(gt, tracks):
+            keys, together = np.unique(pair_key(g[pg], t[pt]), return_counts=True)
+            slot = self.pairs(keys)
+            self.both = grown(self.both, len(self.pairs))
+            self.both[slot] += together
+        self.saving = grown(self.saving, len(self.pairs))
+        np.add.at(self.saving, self.pairs(pair_key(g[gi], t[ti]), add=False), cp - dp)  # in frame order
+        return {"frame": frames, "ospa": o, "localisation": loc, "cardinality": card}
+
+    def label(self) -> None:
+        """Between the passes: OSPA-T step 1 (module docstring), one global assignment of track ids to gt ids."""
+        self.labels = np.zeros(len(self.track_ids), np.int64)
+        self.assigned = np.zeros(len(self.track_ids), bool)
+        if not len(self.gt_ids) or not len(self.track_ids):
+            return
+        g_rank = np.argsort(np.argsort(self.gt_ids.keys))  # dense and in id order, as the assignment is stated
+        t_rank = np.argsort(np.argsort(self.track_ids.keys))
+        shape = (len(self.gt_ids), len(self.track_ids))
+        g, t = split_pair_key(self.pairs.keys)
+        at = (g_rank[g], t_rank[t])
+        both, saving = np.zeros(shape), np.zeros(shape)
+        both[at] = self.both[:len(self.pairs)]
+        saving[at] = self.saving[:len(self.pairs)]
+        n_g = np.zeros(shape[0], np.int64)
+        n_t = np.zeros(shape[1], np.int64)
+        n_g[g_rank] = self.n_g[:shape[0]]
+        n_t[t_rank] = self.n_t[:shape[1]]
+        r, c = linear_sum_assignment(self.cp * (n_g[:, None] + n_t[None, :] - both) - saving)
+        g_by_rank = np.sort(self.gt_ids.keys)
+        track_slot = np.argsort(t_rank)[c]
+        self.labels[track_slot] = g_by_rank[r]
+        self.assigned[track_slot] = True
+
+    def track_labels(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """After ``label``: the track ids in ascending order, the gt id each is labelled with, whether it is."""
+        order = np.argsort(self.track_ids.keys)
+        return self.track_ids.keys[order], self.labels[order], self.assigned[order]
+
+    def score(self, gt: Sequence, tracks: Sequence) -> np.ndarray:
+        """Pass 2: OSPA-T per frame of the chunk with the labelled base distance (returned, and added to the
+        mean)."""
+        frames, n, m, gi, ti, fr, dp = self._frames(gt, tracks)
+        cp = self.cp
+        k = self.track_ids(tracks.id[ti], add=False)
+        same = self.assigned[k] & (self.labels[k] == gt.id[gi])
+        bp = dp + self.alpha ** self.p * ~same
+        keep = np.flatnonzero(bp < cp)
+        sel = keep[max_weight_matching(gi[keep], ti[keep], cp - bp[keep], fr[keep])]
+        ot, _ = _per_frame(n, m, np.bincount(fr[sel], cp - bp[sel], minlength=len(frames)), cp, self.p)
+        self.sums["ospa_t"].add(ot)
+        return ot
+
+    def result(self) -> dict:
+        """The means over frames (``ospa``, ``localisation``, ``cardinality``, ``ospa_t``; None without frames),
+        ``frames`` and ``labelled_tracks``."""
+        means = {name: total.mean() for name, total in self.sums.items()}
+        return {**means, "frames": self.sums["ospa"].count,
+                "labelled_tracks": 0 if self.assigned is None else int(self.assigned.sum())}
+
+
 def ospa(gt: Sequence, tracks: Sequence, c: float = 1.0, p: float = 1.0, label_penalty: float = 1.0) -> dict:
     """Mean per-frame OSPA of ``tracks`` against ``gt`` with its ``localisation`` and ``cardinality`` parts, the
     labelled ``ospa_t``, the number of ``frames`` averaged, ``labelled_tracks`` (track ids given a gt label) and
     ``per_frame`` (lists ``frame``, ``ospa``, ``localisation``, ``cardinality``, ``ospa_t``); see the module docstring.
     ``c``: cut-off (m); ``p``: order; ``label_penalty``: OSPA-T's alpha (m)."""
-    c, p, alpha = float(c), float(p), float(label_penalty)
-    if not np.isfinite(c) or c <= 0.0:
-        raise ValueError("c must be finite and > 0")
-    if not np.isfinite(p) or p < 1.0:
-        raise ValueError("p must be finite and >= 1")
-    if not np.isfinite(alpha) or alpha < 0.0:
-        raise ValueError("label_penalty must be finite and >= 0")
-    check_ids(gt, "gt")
-    check_ids(tracks, "tracks")
-    frames = frames_of(gt, tracks)
-    nf = frames.size
-    if nf == 0:
-        empty = {"frame": [], "ospa": [], "localisation": [], "cardinality": [], "ospa_t": []}
-        return {"ospa": None, "localisation": None, "cardinality": None, "ospa_t": None, "frames": 0,
-                "labelled_tracks": 0, "per_frame": empty}
-
-    ng = np.diff(gt.bounds(frames))
-    nt = np.diff(tracks.bounds(frames))
-    n, m = np.maximum(ng, nt), np.minimum(ng, nt)
-    cp = c ** p
-
-    gi, ti, d = close_pairs(gt, tracks, c)
-    fr = np.searchsorted(frames, gt.frame[gi])
-    dp = d ** p
-
-    # Plain OSPA: maximise the sum of c^p - d^p over pairs within c.
-    sel = max_weight_matching(gi, ti, cp - dp, fr)
-    gain = np.bincount(fr[sel], cp - dp[sel], minlength=nf)
-    o, loc = _per_frame(n, m, gain, cp, p)
-    card = (cp * (n - m) / n) ** (1.0 / p)
-
-    # OSPA-T: labelled base distance, labels from the global assignment.
-    t_ids, labels, assigned = track_labels(gt, tracks, c, p, (gi, ti, d))
-    k = np.searchsorted(t_ids, tracks.id[ti])
-    same = assigned[k] & (labels[k] == gt.id[gi])
-    bp = dp + alpha ** p * ~same
-    keep = np.flatnonzero(bp < cp)
-    sel_t = keep[max_weight_matching(gi[keep], ti[keep], cp - bp[keep], fr[keep])]
-    gain_t = np.bincount(fr[sel_t], cp - bp[sel_t], minlength=nf)
-    ot, _ = _per_frame(n, m, gain_t, cp, p)
-
-    per = {"frame": frames.tolist(), "ospa": o.tolist(), "localisation": loc.tolist(), "cardinality": card.tolist(),
-           "ospa_t": ot.tolist()}
-    return {"ospa": float(o.mean()), "localisation": float(loc.mean()), "cardinality": float(card.mean()),
-            "ospa_t": float(ot.mean()), "frames": int(nf), "labelled_tracks": int(assigned.sum()),
-            "per_frame": per}
+    o = Ospa(c, p, label_penalty)
+    per = o.count(gt, tracks)
+    o.label()
+    per["ospa_t"] = o.score(gt, tracks)
+    return {**o.result(), "per_frame": {name: values.tolist() for name, values in per.items()}}

@@ -23,6 +23,7 @@ from .clearmot import ClearMot, evaluate, score_frames  # noqa: E402
 from .io import load_sequence, read_table  # noqa: E402
 from .score import SEED001_COLUMNS, pct, score_tracking, seeds_table, tracking_table  # noqa: E402
 from .sequence import Sequence  # noqa: E402
+from .stream import CsvPair  # noqa: E402
 from .svg import write_svg  # noqa: E402
 
 TRACK_COLUMNS = ("frame", "t", "id", "x", "y", "vx", "vy")
@@ -158,7 +159,7 @@ def write_report(out: Path, run_dir: Path, walls: np.ndarray, threshold: float, 
     tracks = load_sequence(run_dir / "tracks.csv", occlusion=False)
     robot = read_table(run_dir / "robot.csv", ROBOT_COLUMNS) if (run_dir / "robot.csv").exists() \
         else {"frame": np.zeros(0)}
-    tracking = score_tracking(gt, tracks, threshold)
+    tracking = score_tracking(CsvPair(run_dir / "groundtruth.csv", run_dir / "tracks.csv"), threshold)
     seed001 = evaluate(gt, tracks, SEED001_THRESHOLD)
     events = _events(gt, tracks, threshold)
     walls = _to_odom(walls, robot)

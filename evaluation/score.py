@@ -1,42 +1,63 @@
 """The tracking object of metrics.json, and its table: one function scores any tracker's output, ours in the loop's
-run and anyone's through ``crowdsim evaluate``, so the two agree exactly."""
+run and anyone's through ``crowdsim evaluate``, so the two agree exactly.
+
+It streams: the ground truth and the tracks come as aligned chunks of whole frames (evaluation/stream.py), read
+twice, and every metric keeps state per person, track or pair of them, never per frame, so a run of any length is
+scored in constant memory.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
 from .clearmot import ClearMot, score_frames
-from .hota import hota
-from .ospa import ospa
-from .sequence import Sequence
+from .hota import Hota
+from .ospa import Ospa
 
 OSPA_CUTOFF, OSPA_ORDER = 1.0, 1.0  # m; the issue's c = 1 m, p = 1 (SPENCER's online_analysis uses the same)
 
 
-def score_tracking(gt: Sequence, tracks: Sequence, threshold: float = 1.0) -> dict:
-    """CLEAR-MOT, rIDS, MT/PT/ML, fragmentations, the id swap split and IDF1 of ``tracks`` against ``gt``; then HOTA
-    and OSPA on what counts: the ground truth not ignored, and the tracks but those CLEAR-MOT matched to an ignored
-    person (which are no false positives there either)."""
+def counted_chunks(frames, threshold: float):
+    """The chunks of ``frames`` (aligned (gt, tracks) Sequences) as HOTA and OSPA see them: the ground truth not
+    ignored, and the tracks but those CLEAR-MOT matched to an ignored person (which are no false positives there
+    either); and the ClearMot that decided it, filled once the iteration ends."""
     cm = ClearMot(threshold)
-    excused_frame, excused_id = [], []
-    for frame, result in score_frames(gt, tracks, cm):
-        if len(result.excused_hyp_ids):
-            excused_frame.append(np.full(len(result.excused_hyp_ids), frame))
-            excused_id.append(result.excused_hyp_ids)
+
+    def chunks():
+        for gt, tracks in frames:
+            excused = [(np.full(len(r.excused_hyp_ids), frame), r.excused_hyp_ids)
+                       for frame, r in score_frames(gt, tracks, cm) if len(r.excused_hyp_ids)]
+            keep = np.ones(len(tracks), bool)
+            if excused:
+                ids = np.unique(tracks.id)
+                key = tracks.frame * len(ids) + np.searchsorted(ids, tracks.id)
+                frame, excused_ids = (np.concatenate(parts) for parts in zip(*excused))
+                keep = ~np.isin(key, frame * len(ids) + np.searchsorted(ids, excused_ids))
+            yield gt.select(~gt.ignore), tracks.select(keep)
+
+    return chunks(), cm
+
+
+def score_tracking(frames, threshold: float = 1.0) -> dict:
+    """CLEAR-MOT, rIDS, MT/PT/ML, fragmentations, the id swap split and IDF1 of the tracks against the ground truth
+    of ``frames`` (re-iterable aligned chunks: ``stream.CsvPair`` or ``stream.SequencePair``); then HOTA and OSPA on
+    what counts (``counted_chunks``). Two passes over ``frames``: HOTA's alignment and OSPA-T's labels are global."""
+    h, o = Hota(), Ospa(OSPA_CUTOFF, OSPA_ORDER)
+    chunks, cm = counted_chunks(frames, threshold)
+    for gt, tracks in chunks:
+        h.count(gt, tracks)
+        o.count(gt, tracks)
     tracking = cm.summary()
-    counted = tracks
-    if excused_id:
-        ids = np.unique(tracks.id)
-        key = tracks.frame * len(ids) + np.searchsorted(ids, tracks.id)
-        drop = np.concatenate(excused_frame) * len(ids) + np.searchsorted(ids, np.concatenate(excused_id))
-        counted = tracks.select(~np.isin(key, drop))
-    kept_gt = gt.select(~gt.ignore)
-    h = hota(kept_gt, counted)
-    o = ospa(kept_gt, counted, c=OSPA_CUTOFF, p=OSPA_ORDER)
-    tracking.update({"hota": h["hota"], "deta": h["deta"], "assa": h["assa"], "loca": h["loca"],
-                     "ospa_m": o["ospa"], "ospa_localisation_m": o["localisation"],
-                     "ospa_cardinality_m": o["cardinality"], "ospa_t_m": o["ospa_t"],
-                     "hota_per_alpha": {k: h["per_alpha"][k] for k in ("alpha", "hota", "deta", "assa", "loca")}})
+    h.align()
+    o.label()
+    for gt, tracks in counted_chunks(frames, threshold)[0]:
+        h.match(gt, tracks)
+        o.score(gt, tracks)
+    hr, orr = h.result(), o.result()
+    tracking.update({"hota": hr["hota"], "deta": hr["deta"], "assa": hr["assa"], "loca": hr["loca"],
+                     "ospa_m": orr["ospa"], "ospa_localisation_m": orr["localisation"],
+                     "ospa_cardinality_m": orr["cardinality"], "ospa_t_m": orr["ospa_t"],
+                     "hota_per_alpha": {k: hr["per_alpha"][k] for k in ("alpha", "hota", "deta", "assa", "loca")}})
     return tracking
 
 

@@ -39,6 +39,15 @@ class Sequence:
         return cls(frame[order], ids[order], np.asarray(position, np.float64).reshape(-1, 2)[order],
                    pick(stamp, np.float64), pick(ignore, bool))
 
+    @classmethod
+    def join(cls, chunks: list["Sequence"]) -> "Sequence":
+        """Chunks of consecutive frames (each later one's frames after the earlier's) as one sequence."""
+        if not chunks:
+            return cls(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 2)))
+        stamps = None if any(c.stamp is None for c in chunks) else np.concatenate([c.stamp for c in chunks])
+        return cls(*(np.concatenate([getattr(c, name) for c in chunks]) for name in ("frame", "id", "position")),
+                   stamps, np.concatenate([c.ignore for c in chunks]))
+
     def __len__(self) -> int:
         return len(self.frame)
 

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from crowdsim.cli import main
-from crowdsim.run import CSV_HEADER, GT_HEADER, RunDirError, run
+from crowdsim.outdir import RunDirError
+from crowdsim.run import CSV_HEADER, GT_HEADER, run
 from scenarios import bundled_scenarios, load_scenario
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

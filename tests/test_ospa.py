@@ -8,10 +8,18 @@ import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
-from evaluation.ospa import ospa, track_labels
+from evaluation.ospa import Ospa, ospa
 from test_hota import approx, seq
 
 KEYS = {"ospa", "localisation", "cardinality", "ospa_t", "frames", "labelled_tracks", "per_frame"}
+
+
+def track_labels(gt, tracks):
+    """OSPA-T's step 1 alone: (track ids, their labels, whether labelled)."""
+    o = Ospa()
+    o.count(gt, tracks)
+    o.label()
+    return o.track_labels()
 
 
 def test_one_pair_0_3_m_apart():

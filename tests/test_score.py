@@ -4,6 +4,7 @@ import pytest
 
 from evaluation import Sequence
 from evaluation.score import score_tracking
+from evaluation.stream import SequencePair
 
 
 def test_tracks_on_ignored_persons_are_left_out_of_hota_and_ospa():
@@ -11,7 +12,7 @@ def test_tracks_on_ignored_persons_are_left_out_of_hota_and_ospa():
     gt = Sequence.from_rows([0, 0, 1, 1], [1, 2, 1, 2], [[0, 0], [5, 0], [0, 0], [5, 0]],
                             ignore=[False, True, False, True])
     tracks = Sequence.from_rows([0, 0, 1, 1], [10, 20, 10, 20], [[0, 0], [5, 0], [0, 0], [5, 0]])
-    s = score_tracking(gt, tracks)
+    s = score_tracking(SequencePair(gt, tracks))
     # what counts is one person tracked exactly: every measure perfect; were track 20 counted, DetA would be 2/3
     # and OSPA (two tracks for one person, c = 1) 0.5 a frame
     assert (s["mota"], s["fp"], s["hota"], s["deta"], s["assa"], s["loca"]) == (1.0, 0, 1.0, 1.0, 1.0, 1.0)

@@ -1,0 +1,98 @@
+"""State that grows with the persons and tracks of a sequence, never with its frames: dense slots for ids and id
+pairs, and sums that do not depend on how the frames were chunked.
+
+Why: a run of any length is scored by streaming its frames in chunks (evaluation/stream.py). Every metric keeps its
+state per id or per id pair in arrays indexed by slots that ``Slots`` hands out, and adds its per-frame values in an
+order that makes the result the same, bit for bit, whatever the chunk boundaries.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+_EMPTY_I = np.zeros(0, np.int64)
+
+
+class Slots:
+    """A dense slot number for every int64 key seen so far (an id, or a ``pair_key``): slots are given in order of
+    first appearance (the new keys of one call in ascending order), so per-key state lives in plain arrays."""
+
+    def __init__(self):
+        self.keys = _EMPTY_I  # [n] the key of each slot
+        self._sorted = _EMPTY_I  # keys in ascending order
+        self._slot = _EMPTY_I  # slot of each sorted key
+
+    def __len__(self) -> int:
+        return len(self.keys)
+
+    def __call__(self, keys: np.ndarray, add: bool = True) -> np.ndarray:
+        """The slot of each of ``keys``; unseen keys get new slots (``add``) or -1."""
+        keys = np.asarray(keys, np.int64)
+        if keys.size == 0:
+            return _EMPTY_I
+        unique, inverse = np.unique(keys, return_inverse=True)
+        at = np.searchsorted(self._sorted, unique)
+        found = at < len(self._sorted)
+        found[found] = self._sorted[at[found]] == unique[found]
+        slot = np.full(len(unique), -1, np.int64)
+        slot[found] = self._slot[at[found]]
+        if add and not found.all():
+            new = unique[~found]
+            slot[~found] = len(self.keys) + np.arange(len(new))
+            self._sorted = np.insert(self._sorted, at[~found], new)
+            self._slot = np.insert(self._slot, at[~found], slot[~found])
+            self.keys = np.concatenate([self.keys, new])
+        return slot[inverse.reshape(-1)]
+
+
+def pair_key(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """One int64 key per pair of slots (each below 2^31)."""
+    return (np.asarray(a, np.int64) << 32) | np.asarray(b, np.int64)
+
+
+def split_pair_key(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return key >> 32, key & 0xFFFFFFFF
+
+
+def grown(a: np.ndarray, n: int) -> np.ndarray:
+    """``a`` with room for at least ``n`` rows along its first axis (zero-filled, doubling), so that per-slot
+    arrays grow in amortised constant time."""
+    if len(a) >= n:
+        return a
+    out = np.zeros((max(n, 2 * len(a), 16), *a.shape[1:]), a.dtype)
+    out[:len(a)] = a
+    return out
+
+
+class ExactSum:
+    """The exactly rounded sum of every value added (Shewchuk's algorithm, as ``math.fsum``), kept as a few
+    non-overlapping partials: a mean over frames that does not depend on chunking or on the order of the frames."""
+
+    def __init__(self):
+        self._partials: list[float] = []
+        self.count = 0
+
+    def add(self, values) -> None:
+        partials = self._partials
+        for x in np.asarray(values, np.float64).reshape(-1).tolist():
+            i = 0
+            for y in partials:
+                if abs(x) < abs(y):
+                    x, y = y, x
+                hi = x + y
+                lo = y - (hi - x)
+                if lo:
+                    partials[i] = lo
+                    i += 1
+                x = hi
+            partials[i:] = [x]
+        self.count += int(np.size(values))
+
+    @property
+    def total(self) -> float:
+        return math.fsum(self._partials)
+
+    def mean(self) -> float | None:
+        return self.total / self.count if self.count else None
