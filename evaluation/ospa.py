@@ -108,7 +108,8 @@ class Ospa:
         frames = frames_of(gt, tracks)
         ng, nt = np.diff(gt.bounds(frames)), np.diff(tracks.bounds(frames))
         gi, ti, d = close_pairs(gt, tracks, self.c)
-        return frames, np.maximum(ng, nt), np.minimum(ng, nt), gi, ti, np.searchsorted(frames, gt.frame[gi]), d ** self.p
+        fr = np.searchsorted(frames, gt.frame[gi])
+        return frames, np.maximum(ng, nt), np.minimum(ng, nt), gi, ti, fr, d ** self.p
 
     def count(self, gt: Sequence, tracks: Sequence) -> dict:
         """Pass 1: plain OSPA per frame of the chunk (returned, and added to the means), and OSPA-T's step 1
