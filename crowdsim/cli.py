@@ -138,12 +138,11 @@ def _cmd_scenario_keys(args) -> int:
 
 
 def _cmd_validate(args) -> int:
-    from .outdir import check_out_dir
     from .crowd.validation import run_validation
+    from .outdir import write_directory
 
     out = Path(args.out) if args.out else Path("runs") / f"validation-{time.strftime('%Y%m%d-%H%M%S')}"
-    check_out_dir(out)
-    results = run_validation(out, quick=args.quick, progress=True)
+    results = write_directory(out, lambda tmp: run_validation(tmp, quick=args.quick, progress=True))
     for check in results["checks"]:
         print(f"{'pass' if check['passed'] else 'FAIL'}  {check['name']}")
     print(f"largest overlap between two persons: {100 * results['safety']['max_overlap_m']:.1f} cm; "
