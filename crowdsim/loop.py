@@ -1,9 +1,10 @@
 """The one place that wires a scenario, the crowd, the robot, the sensors, the pipeline and the evaluation together.
 
 ``Simulation.frames`` yields one ``Frame`` per tracking cycle; whoever consumes it (the run command, a test, a
-dataset writer) decides what to keep. The pipeline's parts are the scenario's (``pipeline.assemble``); the loop only
-calls them. Every random draw comes from streams spawned from the scenario seed, one per component, so adding a
-sensor does not change the crowd.
+dataset writer) decides what to keep. ``Simulation.step(command)`` advances one tick, the robot driven by its route
+driver or by a caller's (v, omega) (a gym environment, a planner). The pipeline's parts are the scenario's
+(``pipeline.assemble``); the loop only calls them. Every random draw comes from streams spawned from the scenario
+seed, one per component, so adding a sensor does not change the crowd.
 """
 
 from __future__ import annotations
@@ -170,10 +171,16 @@ class Simulation:
             seed000 |= seed000_visible(xy, pose[:2], transform_points(pose, points[np.isfinite(points[:, 0])]))
         return GroundTruthTags(distance, distance <= self.max_range, beams, beams > 0, seed000)
 
-    def step(self) -> Frame | None:
-        """Advance one tick; return a Frame when a tracking cycle ran in it."""
+    def step(self, command: tuple[float, float] | None = None) -> Frame | None:
+        """Advance one tick; return a Frame when a tracking cycle ran in it.
+
+        ``command``, (v, omega) in m/s and rad/s, drives the robot this tick in place of the scenario's route driver
+        (None: the driver); the robot's speed and acceleration limits apply to it as to the driver's. The safety
+        stop (halting for a laser return in front) belongs to the route driver: a caller's command is the caller's
+        responsibility, and nothing stops it.
+        """
         t0 = time.perf_counter()
-        v, omega = self.robot.drive_command(self._front_clearance())
+        v, omega = self.robot.drive_command(self._front_clearance()) if command is None else _command(command)
         self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p["radius"])
         self.robot.step(v, omega, self.dt)
         t1 = time.perf_counter()
@@ -306,6 +313,17 @@ class Simulation:
             frame = self.step()
             if frame is not None:
                 yield frame
+
+
+def _command(command) -> tuple[float, float]:
+    """A caller's (v, omega) as two floats; ValueError unless it is two finite numbers."""
+    try:
+        values = np.asarray(command)
+    except ValueError:  # a ragged sequence
+        values = np.zeros(0)
+    if values.shape != (2,) or values.dtype.kind not in "iuf" or not np.isfinite(values).all():
+        raise ValueError(f"command: expected (v, omega), two finite numbers in m/s and rad/s, got {command!r}")
+    return float(values[0]), float(values[1])
 
 
 def _on(agent_ids: np.ndarray, ids: np.ndarray, values: np.ndarray, missing=0.0) -> np.ndarray:
