@@ -1,8 +1,10 @@
 """The one place that wires a scenario, the crowd, the robot, the sensors, the pipeline and the evaluation together.
 
 ``Simulation.frames`` yields one ``Frame`` per tracking cycle; whoever consumes it (the run command, a test, a
-dataset writer) decides what to keep. Every random draw comes from streams spawned from the scenario seed, one per
-component, so adding a sensor does not change the crowd.
+dataset writer) decides what to keep. ``Simulation.step(command)`` advances one tick, the robot driven by its route
+driver or by a caller's (v, omega) (a gym environment, a planner). The pipeline's parts are the scenario's
+(``pipeline.assemble``); the loop only calls them. Every random draw comes from streams spawned from the scenario
+seed, one per component, so adding a sensor does not change the crowd.
 """
 
 from __future__ import annotations
@@ -14,10 +16,9 @@ import numpy as np
 
 from evaluation import ClearMot, FrameResult
 from evaluation.occlusion import seed000_visible
-from pipeline.fusion import fuse, to_frame
+from pipeline.assemble import build_pipeline
+from pipeline.fusion import to_frame
 from pipeline.frames import inverse, transform_points
-from pipeline.detectors.laser_segments import SegmentDetector
-from pipeline.tracking.nnt import NearestNeighbourTracker, TrackerParams
 from pipeline.types import (CameraFrame, DepthFrame, DetectedPersons, GroundTruthTags, LaserScan, TrackedPersons,
                             Visibility)
 from scenarios.geometry import wall_segments
@@ -84,11 +85,14 @@ class Simulation:
         self.wall_cameras = [WallCamera(p, self.camera_scene) for p in sensors["wall_cameras"]]
         self.max_range = scenario["evaluation"]["max_range"]
         self.dt = scenario["dt"]
+        # the parts are made once (a user's may be costly to make) and start over at every reset
+        self.pipeline = build_pipeline(scenario["pipeline"], [laser["name"] for laser in sensors["lasers"]])
         self.reset()
 
     def reset(self, seed: int | None = None) -> None:
         """Start over (the scenario's seed unless ``seed`` is given): a new crowd with ids from 1, a robot at its
-        start, fresh detectors, tracker and scores. The MuJoCo scene is kept; nothing else carries over."""
+        start, the pipeline's parts and the scores started over. The MuJoCo scene is kept; nothing else carries
+        over."""
         scenario = self.scenario
         self.seed = scenario["seed"] if seed is None else int(seed)
         n_lasers = len(scenario["sensors"]["lasers"])
@@ -100,9 +104,8 @@ class Simulation:
         self.robot = Robot(scenario["robot"], rngs[1])
         self.lasers = [Laser(p, self.scene, rngs[3 + k]) for k, p in enumerate(scenario["sensors"]["lasers"])]
         self.laser_array = LaserArray(self.lasers, self.scene)  # all lasers due at a tick in one ray call
-        pipe = scenario["pipeline"]
-        self.detectors = [SegmentDetector(pipe["detector"]) for _ in self.lasers]
-        self.tracker = NearestNeighbourTracker(TrackerParams(**pipe["tracker"]), frame=TRACKING_FRAME)
+        self._lasers_by_name = {laser.name: laser for laser in self.lasers}
+        self.pipeline.reset()
         self.clearmot = ClearMot(scenario["evaluation"]["threshold"])
         self.timing = Timing()
         self._next_scan = np.zeros(len(self.lasers))
@@ -114,7 +117,8 @@ class Simulation:
         # for a camera, for every person alive then
         self._latest_seen: dict[str, tuple[float, np.ndarray, np.ndarray, np.ndarray]] = {}
         self._latest_scan: dict[str, LaserScan] = {}
-        self._fused_ids = 0
+        # sensor -> its latest detections since the last tracking cycle, in the tracking frame
+        self._pending: dict[str, DetectedPersons] = {}
         self._frame = 0
 
     def warm_up(self) -> None:
@@ -161,17 +165,22 @@ class Simulation:
         lasers = [k for k, name in enumerate(visibility.sensors) if name in {scan.frame for scan in scans}]
         beams = visibility.amount[near][:, lasers].sum(axis=1).astype(np.int64) if lasers else np.zeros(len(xy), int)
         seed000 = np.zeros(len(xy), bool)
-        by_name = {laser.name: laser for laser in self.lasers}
         for scan in scans:
-            pose = by_name[scan.frame].pose_in(self.robot.pose)
+            pose = self._lasers_by_name[scan.frame].pose_in(self.robot.pose)
             points = scan.points()
             seed000 |= seed000_visible(xy, pose[:2], transform_points(pose, points[np.isfinite(points[:, 0])]))
         return GroundTruthTags(distance, distance <= self.max_range, beams, beams > 0, seed000)
 
-    def step(self) -> Frame | None:
-        """Advance one tick; return a Frame when a tracking cycle ran in it."""
+    def step(self, command: tuple[float, float] | None = None) -> Frame | None:
+        """Advance one tick; return a Frame when a tracking cycle ran in it.
+
+        ``command``, (v, omega) in m/s and rad/s, drives the robot this tick in place of the scenario's route driver
+        (None: the driver); the robot's speed and acceleration limits apply to it as to the driver's. The safety
+        stop (halting for a laser return in front) belongs to the route driver: a caller's command is the caller's
+        responsibility, and nothing stops it.
+        """
         t0 = time.perf_counter()
-        v, omega = self.robot.drive_command(self._front_clearance())
+        v, omega = self.robot.drive_command(self._front_clearance()) if command is None else _command(command)
         self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p["radius"])
         self.robot.step(v, omega, self.dt)
         t1 = time.perf_counter()
@@ -194,11 +203,10 @@ class Simulation:
             self.timing.sensors_s += time.perf_counter() - t1
             self.timing.wall_s += time.perf_counter() - t0
             return None
-        scans, batches = self.laser_array.scan(stamp, self.robot.pose, due), []
+        scans = self.laser_array.scan(stamp, self.robot.pose, due)
         for k, scan in zip(due, scans):
             self._next_scan[k] += self.lasers[k].period
-            odom_T_laser = self.lasers[k].pose_in(self.robot.odom_pose)
-            batches.append(to_frame(self.detectors[k].detect(scan), odom_T_laser, TRACKING_FRAME))
+            self._detect(scan)
         for k, scan in zip(due, scans):
             self._latest_scan[scan.frame] = scan
             hit = np.searchsorted(agents.id, scan.person_id[scan.person_id >= 0])
@@ -206,10 +214,10 @@ class Simulation:
             self._latest_seen[scan.frame] = (stamp, agents.id, beams, self._laser_view(self.lasers[k], agents))
         t2 = time.perf_counter()
         self.timing.sensors_s += t2 - t1
-        detections = fuse(batches, self.scenario["pipeline"]["fusion_distance"], self._fused_ids)
-        self._fused_ids += len(detections)
+        detections = self.pipeline.fusion.fuse(self._pending)
+        self._pending = {}
         t3 = time.perf_counter()
-        tracks = self.tracker.update(stamp, detections)
+        tracks = self.pipeline.tracker.update(stamp, detections)
         self.timing.tracker_s += time.perf_counter() - t3
         self.timing.tracker_cycles += 1
         gt, near = self._groundtruth(agents)
@@ -223,11 +231,35 @@ class Simulation:
         self.timing.wall_s += time.perf_counter() - t0
         return frame
 
+    def _detect(self, data: LaserScan | DepthFrame | CameraFrame) -> None:
+        """The sensor's detector, if it has one, on a frame the sensor made: its detections, brought into the
+        tracking frame, wait for the next tracking cycle (a sensor's latest replace its earlier ones)."""
+        detector = self.pipeline.detectors.get(data.frame)
+        if detector is None:
+            return
+        laser = self._lasers_by_name.get(data.frame)
+        pose = laser.pose_in(self.robot.odom_pose) if laser is not None else self._camera_in_odom(data.frame)
+        self._pending[data.frame] = to_frame(detector.detect(data), pose, TRACKING_FRAME)
+
+    def _camera_in_odom(self, name: str) -> np.ndarray:
+        """The camera's optical frame in odom (a 4x4 transform), placed through the robot's localisation in the map
+        (the true world_T_odom, as the route driver steers by): for a camera on the robot, its mount on the odometry
+        pose."""
+        origin, rot = camera_pose(self.camera_scene, name)
+        x, y, yaw = inverse(self.robot.world_T_odom)
+        c, s = np.cos(yaw), np.sin(yaw)
+        odom_R_world = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        pose = np.eye(4)
+        pose[:3, :3] = odom_R_world @ rot
+        pose[:3, 3] = odom_R_world @ origin + [x, y, 0.0]
+        return pose
+
     def _capture_images(self, stamp: float, depth_due: list[int], wall_due: list[int], agents: AgentStates) -> None:
         for k in depth_due:
             camera = self.depth_cameras[k]
             self._next_depth[k] += camera.period
             image = camera.capture(stamp)
+            self._detect(image)
             self._pending_depth.append(image)
             ids, share = camera.visibility(image)
             self._latest_seen[image.frame] = (stamp, agents.id, _on(agents.id, ids, share),
@@ -236,6 +268,7 @@ class Simulation:
             camera = self.wall_cameras[k]
             self._next_wall[k] += camera.period
             image = camera.capture(stamp)
+            self._detect(image)
             self._pending_camera.append(image)
             self._latest_seen[image.frame] = (stamp, agents.id, _on(agents.id, image.ids, image.visible_fraction),
                                               self._camera_view(camera, agents))
@@ -280,6 +313,17 @@ class Simulation:
             frame = self.step()
             if frame is not None:
                 yield frame
+
+
+def _command(command) -> tuple[float, float]:
+    """A caller's (v, omega) as two floats; ValueError unless it is two finite numbers."""
+    try:
+        values = np.asarray(command)
+    except ValueError:  # a ragged sequence
+        values = np.zeros(0)
+    if values.shape != (2,) or values.dtype.kind not in "iuf" or not np.isfinite(values).all():
+        raise ValueError(f"command: expected (v, omega), two finite numbers in m/s and rad/s, got {command!r}")
+    return float(values[0]), float(values[1])
 
 
 def _on(agent_ids: np.ndarray, ids: np.ndarray, values: np.ndarray, missing=0.0) -> np.ndarray:

@@ -11,20 +11,28 @@ from .types import DetectedPersons
 
 
 def to_frame(dets: DetectedPersons, pose: np.ndarray, frame: str) -> DetectedPersons:
-    """Detections expressed in ``frame``, given the pose of their frame in it."""
-    pos = dets.position.copy()
-    pos[:, :2] = transform_points(pose, dets.position[:, :2])
-    c, s = np.cos(pose[2]), np.sin(pose[2])
-    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])  # a yaw: x-z and y-z terms turn too
+    """Detections expressed in ``frame``, given the pose of their frame in it: a planar pose (x, y, yaw) for a
+    sensor that scans a horizontal plane (a laser), a 4x4 rigid transform for one that looks in 3D (a camera)."""
+    pose = np.asarray(pose, float)
+    if pose.shape == (4, 4):
+        rot = pose[:3, :3]
+        pos = dets.position @ rot.T + pose[:3, 3]
+    else:
+        pos = dets.position.copy()
+        pos[:, :2] = transform_points(pose, dets.position[:, :2])
+        c, s = np.cos(pose[2]), np.sin(pose[2])
+        rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])  # a yaw: x-z and y-z terms turn too
     cov = rot @ dets.covariance @ rot.T
     return DetectedPersons(dets.stamp, frame, dets.modality, dets.detection_id, pos, cov, dets.confidence)
 
 
-def fuse(batches: list[DetectedPersons], distance: float, first_id: int = 0) -> DetectedPersons:
-    """One batch from several in the same frame; pairs from different batches nearer than ``distance`` are averaged.
+def fuse(batches: dict[str, DetectedPersons], distance: float, first_id: int = 0) -> DetectedPersons:
+    """One batch from the batches of several sensors (by name) in the same frame; pairs from different batches
+    nearer than ``distance`` are averaged.
 
-    Fused detections get fresh ids from ``first_id`` on.
+    Fused detections get fresh ids from ``first_id`` on, the latest stamp of the batches, and their ``originals``.
     """
+    names, batches = list(batches), list(batches.values())
     frames = {b.frame for b in batches}
     if len(frames) != 1:
         raise ValueError(f"fusion needs detections in one frame, got {sorted(frames)}")
@@ -55,4 +63,25 @@ def fuse(batches: list[DetectedPersons], distance: float, first_id: int = 0) -> 
     np.maximum.at(fused_conf, inv, conf)
     ids = np.arange(first_id, first_id + m, dtype=np.int64)
     modality = "+".join(sorted({b.modality for b in batches}))
-    return DetectedPersons(batches[0].stamp, batches[0].frame, modality, ids, fused_pos, fused_cov, fused_conf)
+    originals = {}
+    for k, (name, batch) in enumerate(zip(names, batches)):  # a row holds at most one detection of each batch
+        originals[name] = np.full(m, -1, np.int64)
+        originals[name][inv[origin == k]] = batch.detection_id
+    stamp = max(b.stamp for b in batches)
+    return DetectedPersons(stamp, batches[0].frame, modality, ids, fused_pos, fused_cov, fused_conf, originals)
+
+
+class NearestFusion:
+    """The ``nearest`` fusion: ``fuse`` on each cycle's batches, the fused ids counted over the run."""
+
+    def __init__(self, distance: float = 0.4):
+        self.distance = distance
+        self.reset()
+
+    def reset(self) -> None:
+        self._next_id = 0
+
+    def fuse(self, batches: dict[str, DetectedPersons]) -> DetectedPersons:
+        fused = fuse(batches, self.distance, self._next_id)
+        self._next_id += len(fused)
+        return fused

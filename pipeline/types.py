@@ -130,7 +130,12 @@ class GroundTruthTags:
 
 @dataclass
 class DetectedPersons:
-    """Detections of one detector (or one fusion stage) at one instant, in ``frame``."""
+    """Detections of one detector (or one fusion stage) at one instant, in ``frame``.
+
+    A fused batch keeps which detections each of its rows came from (seed 000 Sec. 3.1's composite detections):
+    ``originals`` maps each sensor whose detections were fused to [n] ids of its detection in each row, -1 where it
+    gave none; a detector's own batch has None.
+    """
 
     stamp: float
     frame: str
@@ -139,6 +144,7 @@ class DetectedPersons:
     position: np.ndarray  # [n, 3]
     covariance: np.ndarray  # [n, 3, 3]
     confidence: np.ndarray  # [n]
+    originals: dict[str, np.ndarray] | None = None
 
     def __len__(self) -> int:
         return int(self.detection_id.size)

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 
 from .laser_presets import LASER_PRESETS
-from .schema import Field, ListOf, MapOf, Schema
+from .schema import Field, ListOf, MapOf, Schema, Typed
 
 F = Field
 
@@ -216,7 +216,11 @@ WALL_CAMERA = Schema({
     "rgb": F("bool", True, doc="render a colour image (the segmentation and boxes come without it)"),
 })
 
-DETECTOR = Schema({
+# The pipeline's parts (pipeline/assemble.py builds them): each role has its built-in types, each type its own
+# parameters; `type: module.path:ClassName` names a class of your own instead. The names are assemble's (a test
+# keeps the two registries equal, and each type's defaults equal to its class's).
+
+SEGMENT_DETECTOR = Schema({
     "jump_distance": F("float", 0.4, min=0.0, exclusive_min=True, doc="m, seed 000 Sec. 4.2: 0.4 m"),
     "min_points": F("int", 3, min=1, doc="seed 000 Sec. IV-C: far echoes of fewer than 3 points are unreliable"),
     "min_width": F("float", 0.1, min=0.0, doc="m, narrowest segment taken for a person"),
@@ -227,7 +231,16 @@ DETECTOR = Schema({
                            doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)"),
 })
 
-TRACKER = Schema({  # the defaults are pipeline.tracking.nnt.TrackerParams' (a test keeps the two equal)
+DETECTOR_TYPES = {"laser_segments": SEGMENT_DETECTOR}
+DETECTOR_READS = {"laser_segments": "lasers"}  # the `sensors` list whose frames each built-in detector reads
+
+NEAREST_FUSION = Schema({
+    "distance": F("float", 0.4, min=0.0, doc="m, detections of two sensors nearer than this are one person"),
+})
+
+FUSION_TYPES = {"nearest": NEAREST_FUSION}
+
+NNT = Schema({
     "process_noise": F("float", 0.267, min=0.0, exclusive_min=True,
                        doc="m^2/s^3, q_L of seed 000 Eq. 2 (its IMM's manoeuvre level, Sec. V-D)"),
     "gate_chi2": F("float", 13.82, min=0.0, exclusive_min=True, doc="Mahalanobis gate (chi2 0.999 for 2 dof)"),
@@ -237,11 +250,22 @@ TRACKER = Schema({  # the defaults are pipeline.tracking.nnt.TrackerParams' (a t
     "initial_velocity_variance": F("float", 1.0, min=0.0, exclusive_min=True, doc="m^2/s^2 of a new track"),
 })
 
+TRACKER_TYPES = {"nnt": NNT}
+
+# the methods a class of one's own must have (pipeline/assemble.py's protocols; a test keeps them equal)
+DETECTOR = Typed(DETECTOR_TYPES, "laser_segments", "detector", ("detect", "reset"))
+FUSION = Typed(FUSION_TYPES, "nearest", "fusion", ("fuse", "reset"))
+TRACKER = Typed(TRACKER_TYPES, "nnt", "tracker", ("update", "reset"))
+
 PIPELINE = Schema({
-    "detector": F(DETECTOR, doc="the laser segment detector"),
-    "fusion_distance": F("float", 0.4, min=0.0, doc="m, detections of two lasers nearer than this are one person"),
-    "tracker": F(TRACKER, doc="the nearest-neighbour tracker"),
-})
+    "detector": F(DETECTOR, doc="the detector on every laser (laser_segments: seed 000's segments and geometry)"),
+    "detectors": F(MapOf(F(DETECTOR)), {},
+                   doc="sensor name -> its own detector, in place of `detector` for that sensor"),
+    "fusion": F(FUSION, doc="merges the detections of one cycle (nearest: seed 000's detection-to-detection fusion)"),
+    "fusion_distance": F("float", None, min=0.0,
+                         doc="the old spelling of fusion.distance, moved there when the file is loaded"),
+    "tracker": F(TRACKER, doc="the tracker (nnt: seed 000's nearest-neighbour Kalman tracker)"),
+}, legacy={"fusion_distance": "fusion.distance"})
 
 EVALUATION = Schema({
     "threshold": F("float", 1.0, min=0.0, exclusive_min=True, doc="m, CLEAR-MOT match threshold (seed 000: 1 m)"),
@@ -277,41 +301,51 @@ SCENARIO = Schema({
                          "depth_cameras": F(ListOf(F(DEPTH_CAMERA)), [], doc="RGB-D cameras on the robot"),
                          "wall_cameras": F(ListOf(F(WALL_CAMERA)), [], doc="fixed cameras in the world")}),
                  required=True, doc="the robot's sensors"),
-    "pipeline": F(PIPELINE, doc="detector, fusion and tracker parameters"),
+    "pipeline": F(PIPELINE, doc="the robot's people pipeline: detectors, fusion and tracker, by type"),
     "evaluation": F(EVALUATION, doc="how the tracks are scored"),
 })
 
 
 def reference() -> str:
     """Every key of the scenario format as Markdown tables: key, kind, default, allowed range, meaning."""
-    from .schema import ListOf, MapOf, Schema
-
-    sections: list[tuple[str, Schema]] = [("(top level)", SCENARIO)]
+    sections: list[tuple[str, str, Schema | Typed]] = [("`(top level)`", "", SCENARIO)]
     lines = ["# The scenario format", "", "Generated from `scenarios/format.py` by `crowdsim scenario-keys`; "
              "`NAME` stands for a name you choose.", ""]
+    typed_at: dict[int, str] = {}  # a part's keys are listed once, where they first appear
     k = 0
     while k < len(sections):
-        title, schema = sections[k]
+        title, path, schema = sections[k]
         k += 1
-        lines += [f"## `{title}`", "", "| key | kind | default | range | meaning |", "|---|---|---|---|---|"]
+        if isinstance(schema, Typed) and id(schema) in typed_at:
+            lines += [f"## {title}", "", f"The keys of `{typed_at[id(schema)]}`.", ""]
+            continue
+        lines += [f"## {title}", "", "| key | kind | default | range | meaning |", "|---|---|---|---|---|"]
+        if isinstance(schema, Typed):  # the type row; each built-in type's parameters in a section of its own
+            typed_at[id(schema)] = path
+            sections[k:k] = [(f"`{path}` with `type: {name}`", path, params) for name, params in schema.types.items()]
+            lines += [f"| `type` | str | {schema.default!r} | {schema.expected.removeprefix('one of ')} | "
+                      f"{schema.type_field().doc} |", ""]
+            continue
         for name, field in schema.fields.items():
-            kind, path = field.kind, name if title == "(top level)" else f"{title}.{name}"
+            kind, sub = field.kind, f"{path}.{name}" if path else name
             while isinstance(kind, Field):
                 kind = kind.kind
-            if isinstance(kind, Schema):
-                sections.append((path, kind))
-                text = "mapping"
+            if isinstance(kind, (Schema, Typed)):
+                sections.append((f"`{sub}`", sub, kind))
+                text = "mapping" if isinstance(kind, Schema) else "mapping with a `type`"
             elif isinstance(kind, (ListOf, MapOf)):
                 item = kind.item.kind if isinstance(kind.item, Field) else kind.item
                 suffix = "[i]" if isinstance(kind, ListOf) else ".NAME"
-                if isinstance(item, Schema):
-                    sections.append((path + suffix, item))
+                if isinstance(item, (Schema, Typed)):
+                    sections.append((f"`{sub + suffix}`", sub + suffix, item))
                     text = "list of mappings" if isinstance(kind, ListOf) else "mapping of names to mappings"
                 else:
                     text = f"list of {item}" if isinstance(kind, ListOf) else f"mapping of names to {item}"
             else:
                 text = str(kind)
-            default = "required" if field.required else ("" if isinstance(kind, Schema) else repr(field.default))
+            default = "required" if field.required else (
+                "" if isinstance(kind, (Schema, Typed)) or field.default is None and name in (schema.legacy or {})
+                else repr(field.default))
             low = "" if field.min is None else (f"> {field.min:g}" if field.exclusive_min else f">= {field.min:g}")
             high = "" if field.max is None else f"<= {field.max:g}"
             bounds = ", ".join(b for b in (low, high) if b)

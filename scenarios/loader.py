@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from .format import SCENARIO
+from .format import DETECTOR_READS, SCENARIO
 from .geometry import closest_on_segments, inside_polygon, wall_segments
 from .pedsim import pedsim_to_scenario
 from .schema import ScenarioError, validate
@@ -115,6 +115,23 @@ def check_sensor(sensor: dict, key: str, dt: float, source: str) -> None:
                                 f"{bands[j - 1]:g} m")
 
 
+def check_detectors(scenario: dict, source: str) -> None:
+    """Detectors attached to sensors of the scenario, each built-in one to a kind of sensor it reads."""
+    kinds = {s["name"]: kind for kind, sensors in scenario["sensors"].items() for s in sensors}
+    pipeline = scenario["pipeline"]
+    attached = [("pipeline.detector", pipeline["detector"], "lasers", "every laser")]
+    for name, spec in pipeline["detectors"].items():
+        if name not in kinds:
+            raise ScenarioError(source, f"pipeline.detectors.{name}",
+                                f"no sensor of this scenario is called so; expected one of: {', '.join(kinds)}")
+        attached.append((f"pipeline.detectors.{name}", spec, kinds[name], name))
+    for key, spec, kind, what in attached:
+        reads = DETECTOR_READS.get(spec["type"], kind)  # a class of one's own reads what it is given
+        if reads != kind:
+            raise ScenarioError(source, f"{key}.type", f"{spec['type']} reads sensors.{reads}, and {what} is one of "
+                                                       f"sensors.{kind}; expected a detector for sensors.{kind}")
+
+
 def check_geometry(scenario: dict, source: str) -> None:
     """Cross-key checks: names that must exist, places that must be walkable, limits that must be ordered."""
     crowd = scenario["crowd"]
@@ -167,6 +184,7 @@ def check_geometry(scenario: dict, source: str) -> None:
                                                  "; expected a name of its own for every sensor")
             seen[sensor["name"]] = key
             check_sensor(sensor, f"sensors.{kind}[{i}]", scenario["dt"], source)
+    check_detectors(scenario, source)
     segs = wall_segments(scenario)
     radius = max(t["radius"] for t in types.values()) if types else 0.25
     places = [(f"waypoints.{n}.position", w["position"], "goal") for n, w in scenario["waypoints"].items()]

@@ -6,7 +6,10 @@ expected, so a user fixes one thing at a time and never gets a traceback from de
 
 from __future__ import annotations
 
+import importlib
+import inspect
 import math
+import re
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -22,7 +25,7 @@ class ScenarioError(ValueError):
 @dataclass(frozen=True)
 class Field:
     """One key: ``kind`` is 'float', 'int', 'str', 'bool', 'point' ([x, y]), 'point3' ([x, y, z]), 'pose'
-    ([x, y, yaw]), 'points' (a list of [x, y]), a nested ``Schema``, ``ListOf`` or ``MapOf``."""
+    ([x, y, yaw]), 'points' (a list of [x, y]), a nested ``Schema``, ``ListOf``, ``MapOf`` or ``Typed``."""
 
     kind: Any
     default: Any = None
@@ -38,10 +41,13 @@ class Field:
 @dataclass(frozen=True)
 class Schema:
     """A mapping's keys. With ``presets``, the key ``preset`` names a bundle of values (a sensor model, say) that
-    fills the keys the mapping leaves out, before the fields' own defaults."""
+    fills the keys the mapping leaves out, before the fields' own defaults. ``legacy`` maps an old key (a field of
+    its own, checked there) to the key ``section.name`` of this mapping that now holds it: files written before the
+    change keep working, and the validated data holds the new spelling only."""
 
     fields: dict[str, Field]
     presets: dict[str, dict] | None = None
+    legacy: dict[str, str] | None = None
 
 
 @dataclass(frozen=True)
@@ -55,6 +61,41 @@ class MapOf:
     """A mapping from user-chosen names to items of one schema."""
 
     item: Any
+
+
+@dataclass(frozen=True)
+class Typed:
+    """A mapping whose key ``type`` chooses its schema: a built-in type of ``types`` (name -> the type's parameters)
+    or ``module.path:ClassName``, a user's class imported when the file is loaded. Such a class's parameters are
+    checked by its ``SCHEMA`` (a ``Schema``, defaults filled) or else by its constructor's signature, and it must
+    have ``methods``. ``role`` names the part in messages (``tracker``)."""
+
+    types: dict[str, Schema]
+    default: str
+    role: str
+    methods: tuple[str, ...] = ()
+
+    @property
+    def expected(self) -> str:
+        return f"one of {', '.join(self.types)} or module.path:ClassName"
+
+    def type_field(self) -> Field:
+        return Field("str", self.default,
+                     doc=f"which {self.role}: {', '.join(self.types)} (built in) or module.path:ClassName, a class "
+                         "of your own imported when the file is loaded; the other keys are its constructor's keyword "
+                         "arguments, checked by its SCHEMA (a scenarios.schema.Schema) if it has one")
+
+
+CLASS_PATH = re.compile(r"[A-Za-z_][\w.]*:[A-Za-z_]\w*")
+
+
+def import_class(path: str) -> type:
+    """The class ``module.path:ClassName`` names; ImportError (or what the module raises) when it is not there."""
+    module, _, name = path.partition(":")
+    cls = getattr(importlib.import_module(module), name, None)
+    if not isinstance(cls, type):
+        raise ImportError(f"module {module!r} has no class {name!r}")
+    return cls
 
 
 def _is_number(v: Any) -> bool:
@@ -80,7 +121,7 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
 
     if isinstance(spec, Field):
         kind = spec.kind
-        if isinstance(kind, (Schema, ListOf, MapOf)):
+        if isinstance(kind, (Schema, ListOf, MapOf, Typed)):
             out = validate(value, kind, source, key)
         elif kind == "float":
             if not _is_number(value):
@@ -120,6 +161,8 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
         if spec.max is not None and out > spec.max:
             raise err(f"expected a value at most {spec.max}, got {out!r}")
         return out
+    if isinstance(spec, Typed):
+        return _validate_typed(value, spec, source, key)
     if isinstance(spec, Schema):
         if value is None:
             value = {}
@@ -133,14 +176,20 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
         if spec.presets and value.get("preset") is not None:
             name = validate(value["preset"], spec.fields["preset"], source, f"{key}.preset" if key else "preset")
             value = {**spec.presets[name], **value}
+        legacy = spec.legacy or {}
+        for old, new in legacy.items():
+            if old in value:
+                value = _move_legacy(value, old, new, spec.fields[old], source, key)
         out = {}
         for name, field in spec.fields.items():
             sub = f"{key}.{name}" if key else name
+            if name in legacy:
+                continue
             if name in value:
                 out[name] = validate(value[name], field, source, sub)
             elif field.required:
                 raise ScenarioError(source, sub, "missing required key")
-            elif isinstance(field.kind, Schema):
+            elif isinstance(field.kind, (Schema, Typed)):
                 out[name] = validate({}, field.kind, source, sub)
             else:
                 out[name] = field.default
@@ -156,3 +205,71 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
             raise err(f"expected a mapping of names to entries, got {_describe(value)}")
         return {str(k): validate(v, spec.item, source, f"{key}.{k}") for k, v in value.items()}
     raise TypeError(f"unknown spec {spec!r}")  # pragma: no cover
+
+
+def _move_legacy(value: dict, old: str, new: str, field: Field, source: str, key: str) -> dict:
+    """``value`` with the old key's value (checked as its own field) moved to ``new`` (``section.name``)."""
+    where = f"{key}." if key else ""
+    checked = validate(value[old], field, source, where + old)
+    section, name = new.split(".")
+    inner = value.get(section) or {}
+    if not isinstance(inner, dict):
+        return value  # the section's own check names the fault
+    if name in inner:
+        raise ScenarioError(source, where + old,
+                            f"the old spelling of {where}{new}, which is given too; expected only {where}{new}")
+    return {**{k: v for k, v in value.items() if k != old}, section: {**inner, name: checked}}
+
+
+def _validate_typed(value: Any, spec: Typed, source: str, key: str) -> dict:
+    """A part's specification: its type (a built-in type, else a user's class, imported) and its parameters."""
+    where = f"{key}." if key else ""
+    if value is None:
+        value = {}
+    if not isinstance(value, dict):
+        raise ScenarioError(source, key or "<top level>", f"expected a mapping of keys, got {_describe(value)}")
+    name = value.get("type", spec.default)
+    if not isinstance(name, str) or not (name in spec.types or CLASS_PATH.fullmatch(name)):
+        raise ScenarioError(source, where + "type", f"expected {spec.expected}, got {_describe(name)}")
+    if name in spec.types:
+        schema = spec.types[name]
+    else:
+        cls = _user_class(name, spec, source, where + "type")
+        schema = getattr(cls, "SCHEMA", None)
+        if not isinstance(schema, Schema):
+            params = {k: v for k, v in value.items() if k != "type"}
+            _check_signature(cls, name, params, source, key)
+            return {"type": name, **params}
+    return validate(value, Schema({"type": spec.type_field(), **schema.fields}, schema.presets, schema.legacy),
+                    source, key)
+
+
+def _user_class(name: str, spec: Typed, source: str, key: str) -> type:
+    try:
+        cls = import_class(name)
+    except Exception as e:  # whatever importing the user's module raised, as one error naming the key
+        raise ScenarioError(source, key, f"cannot import {name} ({type(e).__name__}: {e}); expected "
+                                         f"module.path:ClassName naming a class Python can import") from None
+    missing = [m for m in spec.methods if not callable(getattr(cls, m, None))]
+    if missing:
+        raise ScenarioError(source, key, f"{name} has no method {', '.join(missing)}; expected a {spec.role} "
+                                         f"with the methods {', '.join(spec.methods)}")
+    return cls
+
+
+def _check_signature(cls: type, name: str, params: dict, source: str, key: str) -> None:
+    """The parameters against the class's constructor: a name it does not take is an unknown key."""
+    signature = inspect.signature(cls)
+    keywords = [p.name for p in signature.parameters.values()
+                if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)]
+    takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in signature.parameters.values())
+    where = f"{key}." if key else ""
+    for k in params:
+        if k not in keywords and not takes_any:
+            raise ScenarioError(source, f"{where}{k}",
+                                f"unknown key; expected one of: type, {', '.join(keywords)} (the parameters of {name})")
+    try:
+        signature.bind(**params)
+    except TypeError as e:
+        raise ScenarioError(source, key or "<top level>", f"{name} cannot be made from these parameters: {e}; "
+                                                          f"expected its constructor's parameters") from None

@@ -77,6 +77,10 @@ def test_to_frame_round_trip_with_the_inverse_pose():
 # ---------------------------------------------------------------------------------------------------------------
 
 
+def pair(front: DetectedPersons, rear: DetectedPersons) -> dict[str, DetectedPersons]:
+    return {"front_laser": front, "rear_laser": rear}
+
+
 def by_x(d: DetectedPersons):
     order = np.argsort(d.position[:, 0])
     return d.position[order], d.covariance[order], d.confidence[order]
@@ -90,7 +94,7 @@ def test_close_detections_of_two_lasers_become_one_at_their_mean():
     cb = np.diag([0.08, 0.06])
     front = dets([(1.0, 0.0), (5.0, 0.0)], cov_xy=ca, conf=[0.6, 0.9])
     rear = dets([(1.2, 0.1), (10.0, 0.0)], cov_xy=cb, conf=[0.8, 0.7])
-    out = fuse([front, rear], 0.4, first_id=100)
+    out = fuse({"front_laser": front, "rear_laser": rear}, 0.4, first_id=100)
     assert len(out) == 3
     pos, cov, conf = by_x(out)
     np.testing.assert_allclose(pos, [[1.1, 0.05, 0.3], [5.0, 0.0, 0.3], [10.0, 0.0, 0.3]], atol=1e-12)
@@ -107,16 +111,16 @@ def test_detections_of_one_batch_are_never_fused():
     # Two people 0.1 m apart seen by the same laser stay two, whatever the distance; so does a single batch.
     a = dets([(2.0, 0.0), (2.1, 0.0)])
     b = dets([(8.0, 0.0)])
-    out = fuse([a, b], 0.4)
+    out = fuse({"front_laser": a, "rear_laser": b}, 0.4)
     pos, _, _ = by_x(out)
     np.testing.assert_allclose(pos[:, :2], [[2.0, 0.0], [2.1, 0.0], [8.0, 0.0]])
-    assert len(fuse([a], 0.4)) == 2
+    assert len(fuse({"front_laser": a}, 0.4)) == 2
 
 
 def test_distance_threshold_is_strict():
     # 0.5 m apart (exact in binary): not nearer than 0.5 -> two; 0.49 m apart -> one at (0.245, 0).
-    assert len(fuse([dets([(0.0, 0.0)]), dets([(0.5, 0.0)])], 0.5)) == 2
-    out = fuse([dets([(0.0, 0.0)]), dets([(0.49, 0.0)])], 0.5)
+    assert len(fuse(pair(dets([(0.0, 0.0)]), dets([(0.5, 0.0)])), 0.5)) == 2
+    out = fuse(pair(dets([(0.0, 0.0)]), dets([(0.49, 0.0)])), 0.5)
     assert len(out) == 1
     np.testing.assert_allclose(out.position[0, :2], [0.245, 0.0])
 
@@ -124,27 +128,27 @@ def test_distance_threshold_is_strict():
 def test_nearest_pair_is_fused_first():
     # Front: (0, 0) and (0.5, 0); rear: (0.3, 0). Both front ones are within 0.4 of the rear one (0.3 and 0.2 m);
     # the nearer pair (0.5, 0)-(0.3, 0) is fused at (0.4, 0); (0, 0) stays alone.
-    out = fuse([dets([(0.0, 0.0), (0.5, 0.0)]), dets([(0.3, 0.0)])], 0.4)
+    out = fuse(pair(dets([(0.0, 0.0), (0.5, 0.0)]), dets([(0.3, 0.0)])), 0.4)
     pos, cov, _ = by_x(out)
     np.testing.assert_allclose(pos[:, :2], [[0.0, 0.0], [0.4, 0.0]], atol=1e-12)
     np.testing.assert_allclose(cov[:, 0, 0], [0.1, 0.05])
 
 
 def test_modalities_are_joined():
-    out = fuse([dets([(0.0, 0.0)], modality="laser2d"), dets([(0.1, 0.0)], modality="rgbd")], 0.4)
+    out = fuse(pair(dets([(0.0, 0.0)], modality="laser2d"), dets([(0.1, 0.0)], modality="rgbd")), 0.4)
     assert out.modality == "laser2d+rgbd" and len(out) == 1
 
 
 def test_empty_batches_fuse_to_nothing():
-    out = fuse([dets(np.zeros((0, 2))), dets(np.zeros((0, 2)))], 0.4)
+    out = fuse(pair(dets(np.zeros((0, 2))), dets(np.zeros((0, 2)))), 0.4)
     assert len(out) == 0 and out.position.shape == (0, 3) and out.covariance.shape == (0, 3, 3)
-    out = fuse([dets(np.zeros((0, 2))), dets([(1.0, 2.0)])], 0.4)
+    out = fuse(pair(dets(np.zeros((0, 2))), dets([(1.0, 2.0)])), 0.4)
     np.testing.assert_allclose(out.position, [[1.0, 2.0, 0.3]])
 
 
 def test_mixing_frames_raises():
     with pytest.raises(ValueError, match="one frame"):
-        fuse([dets([(0.0, 0.0)], frame="front_laser"), dets([(0.0, 0.0)], frame="base_link")], 0.4)
+        fuse(pair(dets([(0.0, 0.0)], frame="front_laser"), dets([(0.0, 0.0)], frame="base_link")), 0.4)
 
 
 def test_to_frame_turns_the_full_covariance():

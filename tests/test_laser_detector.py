@@ -8,8 +8,6 @@ import pytest
 
 from pipeline.detectors.laser_segments import SegmentDetector
 from pipeline.types import UNKNOWN_VARIANCE, LaserScan
-from scenarios.format import DETECTOR
-from scenarios.schema import validate
 
 R = 0.18  # body radius (PERSON_HIP_RADIUS)
 N_BEAMS = 381
@@ -17,10 +15,6 @@ ANGLE_MIN = np.radians(-95.0)
 INC = np.radians(0.5)
 ANGLES = ANGLE_MIN + INC * np.arange(N_BEAMS)
 U = np.stack([np.cos(ANGLES), np.sin(ANGLES)], 1)
-
-
-def params(**over) -> dict:
-    return validate(over, DETECTOR, "<test>")
 
 
 def circle_ranges(c, r=R) -> np.ndarray:
@@ -50,9 +44,10 @@ def scan_of(*ranges) -> LaserScan:
     return LaserScan(0.5, "front_laser", ANGLE_MIN, INC, 20.0, r, np.full(N_BEAMS, -1))
 
 
-def test_params_are_the_schema_defaults():
-    assert params() == {"jump_distance": 0.4, "min_points": 3, "min_width": 0.1, "max_width": 0.9,
-                        "min_bulge": 0.03, "position_variance": 0.1}
+def test_defaults_are_seed_000s():
+    d = SegmentDetector()
+    assert (d.jump_distance, d.min_points, d.min_width, d.max_width, d.min_bulge, d.position_variance) == (
+        0.4, 3, 0.1, 0.9, 0.03, 0.1)
 
 
 def test_one_body_straight_ahead():
@@ -61,7 +56,7 @@ def test_one_body_straight_ahead():
     # body) and pushes it back along the ray by pi/8 x chord width; the estimate must land within 5 cm of (4, 0).
     scan = scan_of(circle_ranges((4.0, 0.0)))
     assert np.isfinite(scan.ranges).sum() == 11
-    det = SegmentDetector(params()).detect(scan)
+    det = SegmentDetector().detect(scan)
     assert len(det) == 1
     np.testing.assert_allclose(det.position[0, :2], [4.0, 0.0], atol=0.05)
     assert det.position[0, 2] == 0.0
@@ -75,13 +70,13 @@ def test_one_body_at_4m_any_bearing_is_located(bearing_deg):
     # Whatever the body's phase against the beam grid (10 or 11 beams hit it), the centre estimate stays within 5 cm.
     a = np.radians(bearing_deg)
     c = 4.0 * np.array([np.cos(a), np.sin(a)])
-    det = SegmentDetector(params()).detect(scan_of(circle_ranges(c)))
+    det = SegmentDetector().detect(scan_of(circle_ranges(c)))
     assert len(det) == 1
     np.testing.assert_allclose(det.position[0, :2], c, atol=0.05)
 
 
 def test_detection_ids_count_up_across_scans():
-    detector = SegmentDetector(params())
+    detector = SegmentDetector()
     a = detector.detect(scan_of(circle_ranges((4.0, 1.0)), circle_ranges((4.0, -1.0))))
     b = detector.detect(scan_of(circle_ranges((3.0, 0.0))))
     np.testing.assert_array_equal(a.detection_id, [0, 1])
@@ -96,21 +91,21 @@ def test_flat_wall_pieces_are_not_persons(p, q, beams):
     n = np.isfinite(scan.ranges).sum()
     # the piece is seen as one run of >= 3 points: 2 atan(0.25/4) = 7.2 deg -> 15 beams square to the view,
     # atan2(0.9, 3.4) - atan2(0.6, 3) = 3.5 deg -> 7 beams for the oblique piece, 2 atan(1/4) = 28 deg -> 57 beams
-    labels, pts = SegmentDetector(params()).segments(scan)
+    labels, pts = SegmentDetector().segments(scan)
     assert n == beams and np.all(labels == 0)
     width = np.linalg.norm(pts[-1] - pts[0])
     if np.hypot(*np.subtract(q, p)) < 1.0:
         assert 0.1 <= width <= 0.9  # so the point count and width gates pass: flatness (bulge 0) rejects it
-        assert len(SegmentDetector({**params(), "min_bulge": -1.0}).detect(scan)) == 1  # ... as dropping it shows
+        assert len(SegmentDetector(min_bulge=-1.0).detect(scan)) == 1  # ... as dropping it shows
     else:
         assert width > 0.9
-    assert len(SegmentDetector(params()).detect(scan)) == 0
+    assert len(SegmentDetector().detect(scan)) == 0
 
 
 def test_two_bodies_1m_apart_give_two_detections_without_background():
     # Bodies at (4, +-0.5): the beams between them (|a| < 7.1 - 2.5 = 4.6 deg) return nothing -> two segments.
     c = [(4.0, 0.5), (4.0, -0.5)]
-    det = SegmentDetector(params()).detect(scan_of(*(circle_ranges(x) for x in c)))
+    det = SegmentDetector().detect(scan_of(*(circle_ranges(x) for x in c)))
     assert len(det) == 2
     got = det.position[np.argsort(-det.position[:, 1]), :2]
     np.testing.assert_allclose(got, c, atol=0.05)
@@ -127,9 +122,9 @@ def test_two_bodies_in_front_of_a_wall_are_split_by_the_jump_distance():
     hit = np.isfinite(scan.ranges)
     first, last = np.flatnonzero(hit)[[0, -1]]
     assert np.all(hit[first:last + 1])  # no NaN between the first and the last return
-    labels, _ = SegmentDetector(params()).segments(scan)
+    labels, _ = SegmentDetector().segments(scan)
     assert labels.max() + 1 == 5  # wall | body | wall | body | wall
-    det = SegmentDetector(params()).detect(scan)
+    det = SegmentDetector().detect(scan)
     assert len(det) == 2
     got = det.position[np.argsort(-det.position[:, 1]), :2]
     np.testing.assert_allclose(got, c, atol=0.05)
@@ -142,10 +137,10 @@ def test_touching_bodies_merge_into_one_segment():
     # on the bisector y = 0, about 0.22 m from either true centre.
     c = [(4.0, 0.18), (4.0, -0.18)]
     scan = scan_of(*(circle_ranges(x) for x in c))
-    labels, pts = SegmentDetector(params()).segments(scan)
+    labels, pts = SegmentDetector().segments(scan)
     assert pts.shape[0] == 21 and np.all(labels == 0)
     assert np.linalg.norm(np.diff(pts, axis=0), axis=1).max() < 0.4
-    det = SegmentDetector(params()).detect(scan)
+    det = SegmentDetector().detect(scan)
     assert len(det) == 1
     assert det.position[0, 1] == pytest.approx(0.0, abs=1e-9)
     assert np.all(np.linalg.norm(det.position[0, :2] - np.array(c), axis=1) > 0.15)
@@ -154,7 +149,7 @@ def test_touching_bodies_merge_into_one_segment():
 def test_jump_threshold_is_strict():
     # Three returns along one bearing (increment 0) at 4.00, 4.39, 4.80 m: steps 0.39 (< 0.4, joined) and 0.41 (split).
     scan = LaserScan(0.0, "l", 0.0, 0.0, 20.0, np.array([4.0, 4.39, 4.80]), np.full(3, -1))
-    labels, _ = SegmentDetector(params()).segments(scan)
+    labels, _ = SegmentDetector().segments(scan)
     np.testing.assert_array_equal(labels, [0, 0, 1])
 
 
@@ -162,16 +157,16 @@ def test_nan_beams_split_segments():
     # One NaN inside the 11-point body at (4, 0) splits it into runs of 5 and 5 points.
     ranges = circle_ranges((4.0, 0.0))
     ranges[190] = np.nan  # the beam at 0 deg
-    labels, pts = SegmentDetector(params()).segments(scan_of(ranges))
+    labels, pts = SegmentDetector().segments(scan_of(ranges))
     assert pts.shape[0] == 10
     np.testing.assert_array_equal(labels, [0] * 5 + [1] * 5)
     # Every other return removed: six 1-point runs, none reaches min_points 3 -> no detection
     # (the same body without holes is detected, test_one_body_straight_ahead).
     holed = circle_ranges((4.0, 0.0))
     holed[np.flatnonzero(np.isfinite(holed))[1::2]] = np.nan  # keep returns 1, 3, .., 11 of the 11
-    labels, pts = SegmentDetector(params()).segments(scan_of(holed))
+    labels, pts = SegmentDetector().segments(scan_of(holed))
     assert pts.shape[0] == 6 and labels.tolist() == list(range(6))
-    assert len(SegmentDetector(params()).detect(scan_of(holed))) == 0
+    assert len(SegmentDetector().detect(scan_of(holed))) == 0
 
 
 def test_beams_reading_range_max_are_no_returns():
@@ -185,7 +180,7 @@ def test_beams_reading_range_max_are_no_returns():
     np.testing.assert_array_equal(as_max.returned, np.isfinite(ranges))
     assert np.isnan(as_max.points()[~as_max.returned]).all()
     for scan in (as_nan, as_max):
-        labels, pts = SegmentDetector(params()).segments(scan)
+        labels, pts = SegmentDetector().segments(scan)
         assert pts.shape[0] == 10 and labels.tolist() == [0] * 5 + [1] * 5
 
 
@@ -196,7 +191,7 @@ def test_far_body_between_two_beams_has_too_few_points():
     scan = scan_of(circle_ranges(18.0 * np.array([np.cos(a), np.sin(a)])))
     assert np.isfinite(scan.ranges).sum() == 2
     np.testing.assert_allclose(np.degrees(ANGLES[np.isfinite(scan.ranges)]), [0.0, 0.5], atol=1e-9)
-    assert len(SegmentDetector(params()).detect(scan)) == 0
+    assert len(SegmentDetector().detect(scan)) == 0
 
 
 def test_far_body_centred_on_a_beam_still_has_three_points():
@@ -206,13 +201,13 @@ def test_far_body_centred_on_a_beam_still_has_three_points():
     # (Up to 0.18 / sin(0.5 deg) = 20.6 m a centred body keeps 3 points, i.e. over the whole 20 m range.)
     scan = scan_of(circle_ranges((18.0, 0.0)))
     assert np.isfinite(scan.ranges).sum() == 3
-    det = SegmentDetector(params()).detect(scan)
+    det = SegmentDetector().detect(scan)
     assert len(det) == 1
     np.testing.assert_allclose(det.position[0, :2], [18.0, 0.0], atol=0.05)
 
 
 def test_empty_scan_gives_no_detection():
-    det = SegmentDetector(params()).detect(scan_of())
+    det = SegmentDetector().detect(scan_of())
     assert len(det) == 0 and det.position.shape == (0, 3) and det.covariance.shape == (0, 3, 3)
 
 
@@ -221,7 +216,7 @@ def test_noise_does_not_turn_flat_wall_pieces_into_persons():
     # (sigma ~ 1.2 cm / sqrt(13)), so over 1000 noisy scans at most a handful pass the 3 cm gate; a round body at the
     # same place (mean interior depth ~ pi r / 4 = 14 cm) is found in every scan.
     rng = np.random.default_rng(0)
-    detector = SegmentDetector(params())
+    detector = SegmentDetector()
     flat = line_ranges((4.0, -0.25), (4.0, 0.25))
     body = circle_ranges((4.0, 0.0))
     false = sum(len(detector.detect(scan_of(flat + rng.normal(0, 0.012, flat.size)))) for _ in range(1000))

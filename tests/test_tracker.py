@@ -131,7 +131,7 @@ def test_single_walker_velocity_converges_with_one_id():
     # walker) the velocity at 2 s is within 0.1 m/s (over seeds 0-499 the worst axis error was 0.039 m/s).
     t = np.arange(51) * DT  # 0 .. 2.0 s
     truth = np.stack([1.2 * t, np.full_like(t, 3.0)], axis=1)[:, None, :]
-    outs = run(NearestNeighbourTracker(TrackerParams(process_noise=0.001)), truth, np.random.default_rng(7), 0.02)
+    outs = run(NearestNeighbourTracker(process_noise=0.001), truth, np.random.default_rng(7), 0.02)
     last = outs[-1]
     assert len(last) == 1
     assert np.abs(last.velocity[0] - [1.2, 0.0]).max() < 0.1
@@ -190,7 +190,7 @@ def test_two_people_crossing_keep_their_ids():
 
 @pytest.mark.parametrize("n_confirm", [1, 3, 5])
 def test_initiation_after_n_confirm_detections(n_confirm):
-    trk = NearestNeighbourTracker(TrackerParams(n_confirm=n_confirm))
+    trk = NearestNeighbourTracker(n_confirm=n_confirm)
     for k in range(n_confirm - 1):
         out = trk.update(k * DT, dets(k * DT, [[1.0, 2.0]], first_id=k))
         assert len(out) == 0  # seen k + 1 < n_confirm times: tentative only
@@ -214,9 +214,9 @@ def test_ids_are_consecutive_over_confirmed_tracks_only():
 
 
 def test_confirmed_track_deleted_after_n_delete_misses():
-    p = TrackerParams()
+    trk = NearestNeighbourTracker()
+    p = trk.params
     assert p.n_delete == 5
-    trk = NearestNeighbourTracker(p)
     for k in range(3):
         out = trk.update(k * DT, dets(k * DT, [[1.0, 2.0]], first_id=k))
     assert out.track_id.tolist() == [1]
@@ -353,6 +353,6 @@ def test_crowd_of_thirty_is_tracked_well():
 def test_scenario_schema_defaults_are_the_tracker_defaults():
     from dataclasses import asdict
 
-    from scenarios.format import TRACKER
+    from scenarios.format import NNT
 
-    assert {k: f.default for k, f in TRACKER.fields.items()} == asdict(TrackerParams())
+    assert {k: f.default for k, f in NNT.fields.items()} == asdict(TrackerParams())

@@ -13,8 +13,16 @@ from pipeline.types import UNKNOWN_VARIANCE, DetectedPersons, LaserScan
 
 
 class SegmentDetector:
-    def __init__(self, params: dict):
-        self.p = params
+    """The ``laser_segments`` detector. Defaults: seed 000 Sec. 4.2 and IV-C (scenarios/format.py says which)."""
+
+    def __init__(self, jump_distance: float = 0.4, min_points: int = 3, min_width: float = 0.1,
+                 max_width: float = 0.9, min_bulge: float = 0.03, position_variance: float = 0.1):
+        self.jump_distance, self.min_points, self.position_variance = jump_distance, min_points, position_variance
+        self.min_width, self.max_width, self.min_bulge = min_width, max_width, min_bulge
+        self.reset()
+
+    def reset(self) -> None:
+        """Detection ids start again from 0."""
         self._next_id = 0
 
     def segments(self, scan: LaserScan) -> tuple[np.ndarray, np.ndarray]:
@@ -25,7 +33,7 @@ class SegmentDetector:
         p = pts[idx]
         if len(p) == 0:
             return np.zeros(0, np.int64), p
-        gap = np.linalg.norm(np.diff(p, axis=0), axis=1) > self.p["jump_distance"]
+        gap = np.linalg.norm(np.diff(p, axis=0), axis=1) > self.jump_distance
         gap |= np.diff(idx) > 1  # a beam without return also splits
         labels = np.concatenate([[0], np.cumsum(gap)])
         return labels, p
@@ -48,15 +56,15 @@ class SegmentDetector:
         # one noisy return must not make a flat wall piece look round
         bulge = np.add.reduceat(bulge_pt, starts) / np.maximum(count - 2, 1)
         centroid = np.add.reduceat(p, starts) / count[:, None]
-        keep = ((count >= self.p["min_points"]) & (width >= self.p["min_width"]) & (width <= self.p["max_width"])
-                & (bulge >= self.p["min_bulge"]))
+        keep = ((count >= self.min_points) & (width >= self.min_width) & (width <= self.max_width)
+                & (bulge >= self.min_bulge))
         c, w = centroid[keep], width[keep]
         # the visible arc's centroid lies pi/4 r in front of a round body's centre (r = width / 2)
         ray = c / np.maximum(np.linalg.norm(c, axis=1), 1e-9)[:, None]
         centre = c + ray * (np.pi / 8) * w[:, None]
         n = len(centre)
         cov = np.zeros((n, 3, 3))
-        cov[:, 0, 0] = cov[:, 1, 1] = self.p["position_variance"]
+        cov[:, 0, 0] = cov[:, 1, 1] = self.position_variance
         cov[:, 2, 2] = UNKNOWN_VARIANCE
         ids = np.arange(self._next_id, self._next_id + n, dtype=np.int64)
         self._next_id += n

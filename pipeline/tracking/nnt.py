@@ -220,8 +220,9 @@ def kalman_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray) ->
 class NearestNeighbourTracker:
     """Greedy nearest-neighbour Kalman tracker; all track state lives in parallel numpy arrays (one row per track)."""
 
-    def __init__(self, params: TrackerParams | None = None, frame: str = "odom"):
-        self.params = TrackerParams() if params is None else params
+    def __init__(self, frame: str = "odom", **params):
+        """``params``: the keywords of ``TrackerParams`` (its defaults for those left out)."""
+        self.params = TrackerParams(**params)
         self.frame = frame
         self.reset()
 

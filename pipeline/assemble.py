@@ -1,0 +1,80 @@
+"""The pipeline as parts: the interfaces of detectors, fusion and trackers, the built-in types by name, and
+``build_pipeline``, which makes the parts a scenario's (validated) ``pipeline`` section names.
+
+A part is named by its type, a built-in one below or ``module.path:ClassName``, and made as ``cls(**params)`` with
+the section's other keys; every part starts over with ``reset()``. The scenario format (scenarios/format.py) holds
+each built-in type's parameters under the same names; a test keeps the two registries equal.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, Sequence
+
+from scenarios.schema import import_class
+
+from .detectors.laser_segments import SegmentDetector
+from .fusion import NearestFusion
+from .tracking.nnt import NearestNeighbourTracker
+from .types import CameraFrame, DepthFrame, DetectedPersons, LaserScan, TrackedPersons
+
+
+class Detector(Protocol):
+    """Turns one sensor's frame into detections in that sensor's frame; never reads the frame's ground truth
+    (``LaserScan.person_id``, camera segmentation)."""
+
+    def detect(self, frame: LaserScan | DepthFrame | CameraFrame) -> DetectedPersons: ...
+
+    def reset(self) -> None: ...
+
+
+class Fusion(Protocol):
+    """Turns one cycle's detections, each sensor's (by name) brought into the tracking frame, into one batch that
+    keeps which detections each of its rows came from (``DetectedPersons.originals``)."""
+
+    def fuse(self, batches: dict[str, DetectedPersons]) -> DetectedPersons: ...
+
+    def reset(self) -> None: ...
+
+
+class Tracker(Protocol):
+    """Turns each cycle's fused detections into tracks."""
+
+    def update(self, stamp: float, detections: DetectedPersons) -> TrackedPersons: ...
+
+    def reset(self) -> None: ...
+
+
+DETECTORS: dict[str, type] = {"laser_segments": SegmentDetector}
+FUSIONS: dict[str, type] = {"nearest": NearestFusion}
+TRACKERS: dict[str, type] = {"nnt": NearestNeighbourTracker}
+
+
+@dataclass
+class Pipeline:
+    """The parts, made once: ``detectors`` by the name of the sensor each reads."""
+
+    detectors: dict[str, Detector]
+    fusion: Fusion
+    tracker: Tracker
+
+    def reset(self) -> None:
+        """Every part starts over (ids, tracks, counters), as for a new run."""
+        for part in (*self.detectors.values(), self.fusion, self.tracker):
+            part.reset()
+
+
+def build_part(spec: dict, registry: dict[str, type]):
+    """The part ``spec`` names (``type`` and the parameters), made from its built-in type or a user's class."""
+    params = {key: value for key, value in spec.items() if key != "type"}
+    cls = registry[spec["type"]] if spec["type"] in registry else import_class(spec["type"])
+    return cls(**params)
+
+
+def build_pipeline(spec: dict, lasers: Sequence[str]) -> Pipeline:
+    """The parts of a validated ``pipeline`` section: ``detector`` on each of ``lasers`` (sensor names), and each
+    sensor that ``detectors`` names gets its own detector in its place."""
+    own = spec["detectors"]
+    detectors = {name: build_part(own.get(name, spec["detector"]), DETECTORS) for name in lasers}
+    detectors |= {name: build_part(detector, DETECTORS) for name, detector in own.items() if name not in detectors}
+    return Pipeline(detectors, build_part(spec["fusion"], FUSIONS), build_part(spec["tracker"], TRACKERS))
