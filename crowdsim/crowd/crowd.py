@@ -198,7 +198,7 @@ class Crowd:
         v0 = np.full(n, float(desired_speed)) if desired_speed is not None else self._desired_speeds(kind)
         self._append(np.asarray(positions, float), v0, kind, self._new_group_id(n) if group else -1, k,
                      np.repeat(self.route_goal[k, :1], n, 0), np.full(n, self.route_radius[k, 0]))
-        return self.id[-n:].copy()
+        return self.id[len(self.id) - n:].copy()
 
     def _divide_into_groups(self, cluster: dict) -> np.ndarray:
         """Group ids for a cluster's persons, in order: sizes drawn from its weights until all have one, the last
