@@ -59,6 +59,29 @@ def test_members_left_alone_by_their_group_walk_on_as_singles(make_scenario):
     assert arrival[a[1]] == pytest.approx(19.0 / 1.2 + TAU, abs=0.1)
 
 
+def test_pairs_split_by_a_shop_walk_on_and_all_visit_it(make_scenario):
+    # the reported crash's own situation: two pairs walk along y = 20 past a shop (its area spans y 23.2..25.2,
+    # reach 3 m, so irresistible that whoever comes within reach goes): members are drawn one at a time, and
+    # while one member of each pair shops, every walking group has one member. Each walks up to the area's edge,
+    # lingers, and everyone reaches the sink at x = 18
+    sc = make_scenario(attractions={"shop": {"position": [10, 24.2], "size": [2, 2], "strength": 1e6, "reach": 3.0,
+                                             "visit_time": 1.0}}, **sink_at(18, 20, 1.0))
+    crowd = Crowd(sc, np.random.default_rng(0))
+    for x in (5.0, 0.5):
+        crowd.add_walkers(np.array([[x, 19.6], [x, 20.4]]), "out", desired_speed=1.2, group=True)
+    top, alone = np.zeros(5), False
+    while len(crowd.id) and crowd.t < 30:
+        crowd.step(DT)
+        top[crowd.id] = np.maximum(top[crowd.id], crowd.pos[:, 1])
+        walking = crowd.group[~crowd.holding]
+        alone |= len(walking) >= 2 and len(np.unique(walking)) == len(walking)
+        _, d = closest_on_segments(crowd.pos, crowd.walls)
+        assert (d.min(axis=1) >= crowd.radius - 1e-9).all()
+    assert alone
+    assert (top[1:] > 23.2 - 0.3).all()  # each came within 0.3 m (the spot's radius) of the area's edge
+    assert len(crowd.id) == 0 and crowd.t < 30
+
+
 def test_a_crowd_with_nobody_in_it_steps_and_reports_no_one(make_scenario):
     # routes but no sources, clusters or standing people: ten seconds of simulation with the robot passing through
     crowd = Crowd(make_scenario(**sink_at(30, 20, 1.0)), np.random.default_rng(0))
