@@ -214,6 +214,7 @@ class Attractions:
                         "visited": PerAgent(bool, False, (len(self.rate),))}
 
     def update(self, crowd: Crowd, dt: float) -> None:
+        """Send visitors whose time is up back to their route; draw passers-by within reach."""
         if not len(self.rate):
             return
         done = np.flatnonzero((crowd.visiting >= 0) & (crowd.t >= crowd.visit_end))

@@ -85,8 +85,8 @@ class Crowd:
 
     # -- population ---------------------------------------------------------------------------------------------
 
-    def add(self, pos: np.ndarray, v0: np.ndarray, kind: np.ndarray, group, route, goal: np.ndarray,
-            goal_radius: np.ndarray) -> np.ndarray:
+    def add(self, pos: np.ndarray, v0: np.ndarray, kind: np.ndarray, group: int | np.ndarray, route: int | np.ndarray,
+            goal: np.ndarray, goal_radius: np.ndarray) -> np.ndarray:
         """Append persons at ``pos`` [n, 2] (``group`` and ``route`` per person or one for all); their other arrays
         start at the columns' fill values. Returns their ids."""
         n = len(pos)
