@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from crowdsim.crowd import Crowd
+from crowdsim.crowd.behaviours import along_nearest_wall
 from scenarios.geometry import closest_on_segments
 
 DT = 0.04
@@ -154,7 +155,7 @@ def test_queue_lines_people_up_behind_the_service_point(make_scenario):
     ids = crowd.add_walkers(np.stack([np.full(5, 30.0), np.linspace(16, 24, 5)], 1), "r", desired_speed=1.2)
     for _ in range(int(40 / DT)):
         crowd.step(DT)
-    line = crowd.queue_members[0]
+    line = crowd.queues.members[0]
     assert sorted(line) == sorted(ids.tolist())
     idx = np.searchsorted(crowd.id, line)
     slots = np.stack([20 + 0.7 * np.arange(5), np.full(5, 20.0)], 1)
@@ -168,7 +169,7 @@ def test_queue_serves_first_come_first_served(make_scenario):
     joined, left, alive = [], [], set(crowd.id.tolist())
     for _ in range(int(120 / DT)):
         crowd.step(DT)
-        joined += [i for i in crowd.queue_members[0] if i not in joined]
+        joined += [i for i in crowd.queues.members[0] if i not in joined]
         now = set(crowd.id.tolist())
         left += sorted(alive - now)
         alive = now
@@ -275,7 +276,7 @@ def test_wall_following_keeps_the_wall_on_its_side_round_a_corner(make_scenario)
     # the left it heads -x along y = 0, and -y along x = 40 (towards the corner, where it turns right onto y = 0)
     crowd = Crowd(make_scenario(**one_route((20, 20))), np.random.default_rng(0))
     crowd.add_walkers(np.array([[20.0, 0.5], [39.6, 0.5]]), "r")
-    right = crowd._along_nearest_wall(np.arange(2), np.array([1.0, 1.0]))
-    left = crowd._along_nearest_wall(np.arange(2), np.array([-1.0, -1.0]))
+    right = along_nearest_wall(crowd.pos, crowd.walls, np.array([1.0, 1.0]))
+    left = along_nearest_wall(crowd.pos, crowd.walls, np.array([-1.0, -1.0]))
     assert right == pytest.approx(np.array([[1.0, 0.0], [0.0, 1.0]]))
     assert left == pytest.approx(np.array([[-1.0, 0.0], [0.0, -1.0]]))

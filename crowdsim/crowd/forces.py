@@ -156,8 +156,6 @@ def group_forces(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, radius
     """
     f = np.zeros_like(pos)
     idx = np.flatnonzero(group >= 0)
-    if len(idx) < 2:
-        return f
     _, g, size = np.unique(group[idx], return_inverse=True, return_counts=True)
     size_i = size[g]
     total = np.stack([np.bincount(g, pos[idx, 0]), np.bincount(g, pos[idx, 1])], 1)
@@ -174,17 +172,25 @@ def group_forces(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, radius
     cosang = np.einsum("ij,ij->i", heading, to_o) / np.maximum(np.linalg.norm(to_o, axis=1), 1e-9)
     alpha = np.maximum(np.arccos(np.clip(cosang, -1, 1)) - np.radians(vision_deg), 0.0)
     f[idx] += -gaze * alpha[:, None] * vel[idx] * (size_i > 1)[:, None]
-    # repulsion between members: pairs within a group, found by comparing members k places apart in group order
-    order = np.argsort(g, kind="stable")
-    a_list, b_list = [], []
-    for k in range(1, int(size.max())):
-        same = g[order[:-k]] == g[order[k:]]
-        a_list += [order[:-k][same], order[k:][same]]
-        b_list += [order[k:][same], order[:-k][same]]
-    a, b = np.concatenate(a_list), np.concatenate(b_list)
+    # repulsion between members
+    a, b = pairs_within_groups(g)
     d = pos[idx[a]] - pos[idx[b]]
     dist = np.maximum(np.linalg.norm(d, axis=1), 1e-9)
     near = dist < radius[idx[a]] + radius[idx[b]] + margin
     push = repulsion * d[near] / dist[near, None]
     np.add.at(f, idx[a[near]], push)
     return f
+
+
+def pairs_within_groups(group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every ordered pair (a, b), a != b, of indices whose ``group`` labels (0 .. G-1) are equal: a group of n
+    gives n (n - 1) pairs, a group of one none. Each member's partners come in the group's order."""
+    order = np.argsort(group, kind="stable")
+    size = np.bincount(group)
+    first = np.cumsum(size) - size  # where each group starts in ``order``
+    partners = size[group]
+    a = np.repeat(np.arange(len(group)), partners)
+    rank = np.arange(len(a)) - np.repeat(np.cumsum(partners) - partners, partners)  # 0 .. n-1 within each member
+    b = order[np.repeat(first[group], partners) + rank]
+    other = a != b
+    return a[other], b[other]

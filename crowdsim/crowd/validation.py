@@ -447,7 +447,7 @@ def rimea6(quick: bool = False, plot_dir: Path | None = None, seed: int = 6, par
     sc = _scenario("rimea6", walls, wps, {"r": {"waypoints": ["corner", "exit"], "sink": True}}, params)
     rng = np.random.default_rng(seed)
     crowd = Crowd(sc, rng)
-    radius = crowd.type_radius[crowd.type_names.index("adult")]
+    radius = crowd.types.radius[crowd.types.names.index("adult")]
     margin = radius + 0.02
     pos = place_discs(rng, n, radius, *_box([margin, margin], [6.0 - margin, width - margin]))
     crowd.add_walkers(pos, "r")
@@ -613,7 +613,7 @@ def bottleneck_run(width: float, n: int, seed: int = 0, limit: float = 200.0, pa
                    {"r": {"waypoints": ["out"], "sink": True}}, params)
     rng = np.random.default_rng(seed)
     crowd = Crowd(sc, rng)
-    radius = crowd.type_radius[crowd.type_names.index("adult")]
+    radius = crowd.types.radius[crowd.types.names.index("adult")]
     margin = radius + 0.05
     pos = place_discs(rng, n, radius, *_box([margin, margin], [side - margin - 1.0, side - margin]))
     crowd.add_walkers(pos, "r")
