@@ -330,6 +330,7 @@ def _on(agent_ids: np.ndarray, ids: np.ndarray, values: np.ndarray, missing=0.0)
     """``values`` of persons ``ids`` laid out over ``agent_ids`` (sorted); ``missing`` for those not among them."""
     out = np.full(len(agent_ids), missing, np.result_type(missing, np.asarray(values)))
     rows = np.searchsorted(agent_ids, ids)
-    keep = (rows < len(agent_ids)) & (agent_ids[np.minimum(rows, len(agent_ids) - 1)] == ids)
+    keep = rows < len(agent_ids)  # and, below, the person found there (nobody is found among no one)
+    keep[keep] = agent_ids[rows[keep]] == ids[keep]
     out[rows[keep]] = np.asarray(values)[keep]
     return out

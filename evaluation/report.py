@@ -56,7 +56,9 @@ def _events(gt: Sequence, tracks: Sequence, threshold: float) -> dict:
 
 
 def _paths(seq: Sequence):
-    """(id, [k, 2] positions in frame order) per id."""
+    """(id, [k, 2] positions in frame order) per id (none for an empty sequence)."""
+    if not len(seq):
+        return []
     order = np.lexsort((seq.frame, seq.id))
     ids, xy = seq.id[order], seq.position[order]
     cuts = np.flatnonzero(np.diff(ids)) + 1

@@ -152,6 +152,11 @@ def check_geometry(scenario: dict, source: str) -> None:
         for i, g in enumerate(scenario[key]):
             if g["agent_type"] not in types:
                 raise ScenarioError(source, f"{key}[{i}].agent_type", f"unknown agent type; expected one of: {known}")
+    for key in ("sources", "clusters"):
+        for i, g in enumerate(scenario[key]):
+            if sum(g["group_size_weights"]) <= 0:
+                raise ScenarioError(source, f"{key}[{i}].group_size_weights",
+                                    "expected at least one positive weight (of group sizes 1, 2, ...)")
     clash = set(scenario["waypoints"]) & set(scenario["queues"])
     if clash:
         name = sorted(clash)[0]

@@ -152,6 +152,23 @@ def test_cameras_run_at_their_rates_and_report_who_they_saw():
     assert (last.amount[:, 3] > 0).sum() >= 3  # the corner camera sees people
 
 
+def test_cameras_go_on_when_everyone_has_left():
+    # four people walk from the room's middle to a sink 4 m away: once the last has left, the cameras' latest
+    # frames still list who they saw, and the cycles go on with nobody
+    scenario = camera_room()
+    scenario.update(waypoints={"exit": {"position": [12.0, 10.0], "radius": 1.0}},
+                    routes={"out": {"waypoints": ["exit"], "sink": True}}, sources=[], standing=[],
+                    clusters=[{"position": [8.0, 10.0], "count": 4, "spread": [1.0, 1.0], "route": "out",
+                               "agent_type": "adult", "group_size_weights": [0.0, 1.0]}], warmup=0.0)
+    sim = Simulation(scenario)
+    frames = list(sim.frames(8.0))
+    alive = [len(f.agents.id) for f in frames]
+    assert alive[0] == 4 and alive[-1] == 0
+    assert max(f.visibility.amount[:, 3].max(initial=0) for f in frames) > 0  # the corner camera saw them
+    empty = [f for f in frames if not len(f.agents.id)]
+    assert len(empty) > 25 and all(f.visibility.amount.shape == (0, 4) and not len(f.groundtruth) for f in empty)
+
+
 def test_camera_runs_are_bit_for_bit_repeatable():
     images = []
     for _ in range(2):

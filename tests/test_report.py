@@ -48,3 +48,16 @@ def test_the_report_marks_every_switch_and_false_positive_it_counts(tmp_path):
     assert events["stamp"].tolist() == [0.0, 0.1, 0.2]
     # per frame: counted gt, matches, fp, fn, switches
     assert events["counts"][:, :5].tolist() == [[2, 2, 0, 0, 0], [1, 1, 0, 0, 0], [2, 2, 1, 0, 1]]
+
+
+def test_report_of_a_run_without_anyone(tmp_path):
+    # nobody in the room: no ground truth, no tracks; the report says so and draws its (empty) figures
+    empty = tmp_path / "empty.yaml"
+    empty.write_text("name: empty\nduration: 1.0\nmap: {walls: [[[0, 0], [20, 0], [20, 20], [0, 20], [0, 0]]]}\n"
+                     "robot: {start: [5, 5, 0]}\nsensors: {lasers: [{name: front_laser, mount: [0.25, 0, 0]}]}\n")
+    run = tmp_path / "run"
+    assert main(["run", str(empty), "--out", str(run), "--quiet"]) == 0
+    assert main(["report", str(run)]) == 0
+    text = (run / "report" / "report.md").read_text()
+    assert "0 frames; ground truth 0 rows, of which 0 ignored" in text
+    assert json.loads((run / "report" / "tracking.json").read_text())["tracking"]["mota"] is None

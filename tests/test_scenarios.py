@@ -220,6 +220,16 @@ def test_source_routes_all_zero(tmp_path):
     expect_error(path, "sources[0].routes", "positive weight")
 
 
+@pytest.mark.parametrize("key", ["sources", "clusters"])
+def test_group_sizes_all_zero(tmp_path, key):
+    data = base()
+    if key == "clusters":
+        data["clusters"] = [{"position": data["sources"][0]["position"], "route": "r"}]
+    data[key][0]["group_size_weights"] = [0.0, 0.0]
+    path = write(tmp_path, data)
+    expect_error(path, f"{key}[0].group_size_weights", "positive weight")
+
+
 def test_agent_type_speed_limits_ordered(tmp_path):
     data = base()
     data["crowd"] = {"agent_types": {"adult": {"speed_min": 2.5, "speed_max": 2.0}}}
