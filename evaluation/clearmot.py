@@ -59,6 +59,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
+from .assignment import max_weight_matching
 from .sequence import Sequence, frames_of
 from .tables import Slots, grown, pair_key, split_pair_key
 
@@ -274,16 +275,10 @@ class ClearMot:
                 "persons": n}
 
     def _identity(self) -> dict:
-        """IDF1, IDP, IDR: the best one-to-one assignment of gt ids to hypothesis ids over the sequence."""
-        idtp = 0
-        if len(self._pairs):
-            g, h = split_pair_key(self._pairs.keys)
-            gu, gi = np.unique(g, return_inverse=True)
-            hu, hi = np.unique(h, return_inverse=True)
-            counts = np.zeros((gu.size, hu.size))
-            counts[gi, hi] = self._together[:len(self._pairs)]
-            r, c = linear_sum_assignment(counts, maximize=True)
-            idtp = int(counts[r, c].sum())
+        """IDF1, IDP, IDR: the best one-to-one assignment of gt ids to hypothesis ids over the sequence (a sparse
+        maximum-weight matching of the pairs ever within the threshold)."""
+        together = self._together[:len(self._pairs)]
+        idtp = int(together[max_weight_matching(*split_pair_key(self._pairs.keys), together)].sum())
         gt, hyps = self._gt, self._hyps
         return {"idf1": None if gt + hyps == 0 else 2 * idtp / (gt + hyps),
                 "idp": None if hyps == 0 else idtp / hyps, "idr": None if gt == 0 else idtp / gt, "idtp": idtp}

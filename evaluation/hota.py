@@ -42,7 +42,7 @@ from scipy.optimize import linear_sum_assignment
 from evaluation.sequence import Sequence, frames_of
 from evaluation.tables import Slots, grown, pair_key, split_pair_key
 
-__all__ = ["Hota", "hota", "ALPHAS", "same_frame_pairs", "close_pairs", "max_weight_matching", "check_ids"]
+__all__ = ["Hota", "hota", "ALPHAS", "same_frame_pairs", "close_pairs", "matching_by_frame", "check_ids"]
 
 ALPHAS = np.arange(1, 20) / 20  # 0.05 ... 0.95
 _TOL = 1e-12  # a similarity this close below alpha still counts (rounding of d / scale)
@@ -107,7 +107,7 @@ def _rank(a: np.ndarray) -> np.ndarray:
     return (np.cumsum(used) - 1)[a]
 
 
-def max_weight_matching(rows: np.ndarray, cols: np.ndarray, weight: np.ndarray, group: np.ndarray) -> np.ndarray:
+def matching_by_frame(rows: np.ndarray, cols: np.ndarray, weight: np.ndarray, group: np.ndarray) -> np.ndarray:
     """Indices of the pairs of a maximum-weight one-to-one matching of rows to columns.
 
     ``weight`` > 0; ``group``: the frame. Pairs are sorted by frame then row, and rows and columns are numbered in
@@ -201,7 +201,7 @@ class Hota:
     def match(self, gt: Sequence, tracks: Sequence) -> None:
         """Pass 2 (steps 2-3): one matching per frame on A * S, and the matches counted per pair and alpha."""
         gi, ti, s, pair, _, _ = self._close(gt, tracks, add=False)
-        m = max_weight_matching(gi, ti, self.alignment[pair] * s, gt.frame[gi])
+        m = matching_by_frame(gi, ti, self.alignment[pair] * s, gt.frame[gi])
         sm = s[m]
         k = np.searchsorted(ALPHAS - _TOL, sm, side="right")  # a match is a TP at the first k alphas
         np.add.at(self.hits, (pair[m], k), 1)

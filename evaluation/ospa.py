@@ -26,9 +26,10 @@ min(c, (d^p + alpha^p [labels differ])^(1/p)) in place of d_c; its cardinality t
 
 1. Step 1 of the paper: a global one-to-one assignment of track ids to gt ids over the whole sequence. The distance
    of gt id l and track id r sums over frames min(Delta, d)^p where both are present, Delta^p where exactly one is,
-   and 0 where neither is; ``linear_sum_assignment`` minimises the total over the assigned pairs, every id of the
-   smaller set being assigned. The paper has its own cut-off Delta for this step; we take Delta = c. (With p = 1,
-   the default, the exponent does nothing.)
+   and 0 where neither is; the assignment minimises the total over the assigned pairs, every id of the smaller set
+   being assigned (``assignment.ospa_t_labels`` solves it exactly on the pairs ever present together, without the
+   dense matrix). The paper has its own cut-off Delta for this step; we take Delta = c. (With p = 1, the default,
+   the exponent does nothing.)
 2. A track id assigned to gt id l carries label l; every other track id carries a label no gt id has.
 
 ``label_penalty`` (alpha) defaults to c, the top of the paper's range alpha in [0, c] (a larger alpha acts as c):
@@ -42,7 +43,7 @@ evaluated; it is not averaged in (zeros for idle time would flatter a tracker). 
 
 Computation: a pair at the cut-off costs what leaving both points unassigned does, so the minimum over assignments
 is c^p m minus a maximum-weight matching of the pairs closer than c, weighted c^p - base^p; the matching is done
-on those pairs only, frame by frame (hota.close_pairs, hota.max_weight_matching).
+on those pairs only, frame by frame (hota.close_pairs, hota.matching_by_frame).
 
 SPENCER (spencer_people_tracking, spencer_tracking_metrics/ospa, adapted from the cuda-PHDSLAM ospa.py) computes
 differently; its online_analysis uses c = 1 m (the matching threshold), p = 1 and a label weight a = 10:
@@ -62,9 +63,9 @@ differently; its online_analysis uses c = 1 m (the matching threshold), p = 1 an
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
-from evaluation.hota import check_ids, close_pairs, max_weight_matching, same_frame_pairs
+from evaluation.assignment import ospa_t_labels
+from evaluation.hota import check_ids, close_pairs, matching_by_frame, same_frame_pairs
 from evaluation.sequence import Sequence, frames_of
 from evaluation.tables import ExactSum, Slots, grown, pair_key, split_pair_key
 
@@ -116,7 +117,7 @@ class Ospa:
         statistics."""
         frames, n, m, gi, ti, fr, dp = self._frames(gt, tracks)
         cp, nf = self.cp, len(frames)
-        sel = max_weight_matching(gi, ti, cp - dp, fr)  # maximise the sum of c^p - d^p over pairs within c
+        sel = matching_by_frame(gi, ti, cp - dp, fr)  # maximise the sum of c^p - d^p over pairs within c
         o, loc = _per_frame(n, m, np.bincount(fr[sel], cp - dp[sel], minlength=nf), cp, self.p)
         card = (cp * (n - m) / n) ** (1.0 / self.p)
         for name, values in (("ospa", o), ("localisation", loc), ("cardinality", card)):
@@ -135,27 +136,15 @@ class Ospa:
         return {"frame": frames, "ospa": o, "localisation": loc, "cardinality": card}
 
     def label(self) -> None:
-        """Between the passes: OSPA-T step 1 (module docstring), one global assignment of track ids to gt ids."""
+        """Between the passes: OSPA-T step 1 (module docstring), one global assignment of track ids to gt ids,
+        solved on the pairs (evaluation/assignment.py)."""
+        g, t = split_pair_key(self.pairs.keys)
+        n = len(self.pairs)
+        gt_slot, track_slot = ospa_t_labels(self.n_g[:len(self.gt_ids)], self.n_t[:len(self.track_ids)], g, t,
+                                            self.both[:n], self.saving[:n], self.cp)
         self.labels = np.zeros(len(self.track_ids), np.int64)
         self.assigned = np.zeros(len(self.track_ids), bool)
-        if not len(self.gt_ids) or not len(self.track_ids):
-            return
-        g_rank = np.argsort(np.argsort(self.gt_ids.keys))  # dense and in id order, as the assignment is stated
-        t_rank = np.argsort(np.argsort(self.track_ids.keys))
-        shape = (len(self.gt_ids), len(self.track_ids))
-        g, t = split_pair_key(self.pairs.keys)
-        at = (g_rank[g], t_rank[t])
-        both, saving = np.zeros(shape), np.zeros(shape)
-        both[at] = self.both[:len(self.pairs)]
-        saving[at] = self.saving[:len(self.pairs)]
-        n_g = np.zeros(shape[0], np.int64)
-        n_t = np.zeros(shape[1], np.int64)
-        n_g[g_rank] = self.n_g[:shape[0]]
-        n_t[t_rank] = self.n_t[:shape[1]]
-        r, c = linear_sum_assignment(self.cp * (n_g[:, None] + n_t[None, :] - both) - saving)
-        g_by_rank = np.sort(self.gt_ids.keys)
-        track_slot = np.argsort(t_rank)[c]
-        self.labels[track_slot] = g_by_rank[r]
+        self.labels[track_slot] = self.gt_ids.keys[gt_slot]
         self.assigned[track_slot] = True
 
     def track_labels(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -172,7 +161,7 @@ class Ospa:
         same = self.assigned[k] & (self.labels[k] == gt.id[gi])
         bp = dp + self.alpha ** self.p * ~same
         keep = np.flatnonzero(bp < cp)
-        sel = keep[max_weight_matching(gi[keep], ti[keep], cp - bp[keep], fr[keep])]
+        sel = keep[matching_by_frame(gi[keep], ti[keep], cp - bp[keep], fr[keep])]
         ot, _ = _per_frame(n, m, np.bincount(fr[sel], cp - bp[sel], minlength=len(frames)), cp, self.p)
         self.sums["ospa_t"].add(ot)
         return ot
