@@ -122,7 +122,8 @@ class CsvWriter:
                 table = table.astype(object)
                 for column, names in self.names.items():
                     table[:, column] = names[table[:, column].astype(int)]
-            np.savetxt(self.file, table, fmt=self.fmt, delimiter=",")
+            # one format over the whole block: the text ``np.savetxt`` writes row by row, in one string
+            self.file.write((",".join(self.fmt) + "\n") * len(table) % tuple(table.ravel().tolist()))
         self.block, self.rows = [], 0
 
     def close(self) -> None:

@@ -68,6 +68,7 @@ __all__ = ["ClearMot", "FrameResult", "evaluate"]
 _EMPTY_I = np.zeros(0, np.int64)
 _EMPTY_F = np.zeros(0, np.float64)
 _EMPTY_B = np.zeros(0, bool)
+GATHER_ROWS = 1 << 14  # counted persons and close pairs gathered over frames before they are counted per person
 
 
 @dataclass
@@ -147,11 +148,14 @@ class ClearMot:
         self._hyps = 0
         self._last_frame: int | None = None  # the frame number last scored by ``score_frames``
         # Per counted person (a slot): frames counted, frames matched, matched runs, matched in their last counted
-        # frame; per pair of a counted person and a counted hypothesis: frames within the threshold (IDF1).
+        # frame; per pair of a counted person and a counted hypothesis: frames within the threshold (IDF1). Frames
+        # are gathered (``_gathered``: counted ids, their matched flags, pair ids) and absorbed a batch at a time.
         self._persons, self._hyp_slots, self._pairs = Slots(), Slots(), Slots()
         self._counted = self._matched = self._runs = np.zeros(0, np.int64)
         self._was_matched = np.zeros(0, bool)
         self._together = np.zeros(0, np.int64)
+        self._gathered: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+        self._gathered_rows = 0
 
     def update(self, gt_ids: np.ndarray, gt_pos: np.ndarray, hyp_ids: np.ndarray, hyp_pos: np.ndarray,
                gt_ignore: np.ndarray | None = None) -> FrameResult:
@@ -246,28 +250,43 @@ class ClearMot:
         self._dist_sum += float(md.sum())
         self._hyps += m_counted
 
-        self._count_trajectories(gt_ids[counted], np.isin(counted, mg))
-        if n_counted and m_counted:
-            r, c = np.nonzero((dist <= thr) & ~ignore[:, None] & hyp_counted)
-            pairs = self._pairs(pair_key(self._persons(gt_ids[r]), self._hyp_slots(hyp_ids[c])))
-            self._together = grown(self._together, len(self._pairs))
-            np.add.at(self._together, pairs, 1)
+        r, c = np.nonzero((dist <= thr) & ~ignore[:, None] & hyp_counted) if n_counted and m_counted else (_EMPTY_I, _EMPTY_I)
+        matched = np.zeros(n, bool)
+        matched[mg] = True
+        self._gathered.append((gt_ids[counted], matched[counted], gt_ids[r], hyp_ids[c]))
+        self._gathered_rows += n_counted + r.size
+        if self._gathered_rows >= GATHER_ROWS:
+            self._absorb()
         return res
 
-    def _count_trajectories(self, ids: np.ndarray, matched: np.ndarray) -> None:
-        """One frame of the counted persons ``ids`` and whether each was matched: a matched run starts where a
-        person is matched after an unmatched counted frame (or in their first)."""
+    def _absorb(self) -> None:
+        """The gathered frames into the per-person and per-pair counts. Per person, in frame order: a matched run
+        starts where they are matched after an unmatched counted frame (or in their first)."""
+        if not self._gathered:
+            return
+        ids, matched, pair_g, pair_h = (np.concatenate(parts) for parts in zip(*self._gathered))
+        frame = np.repeat(np.arange(len(self._gathered)), [len(g[0]) for g in self._gathered])
+        self._gathered, self._gathered_rows = [], 0
         slot = self._persons(ids)
         n = len(self._persons)
         self._counted, self._matched, self._runs = (grown(a, n) for a in (self._counted, self._matched, self._runs))
         self._was_matched = grown(self._was_matched, n)
-        self._counted[slot] += 1
-        self._matched[slot] += matched
-        self._runs[slot] += matched & ~self._was_matched[slot]
-        self._was_matched[slot] = matched
+        order = np.lexsort((frame, slot))
+        slot, matched = slot[order], matched[order]
+        first = np.r_[True, slot[1:] != slot[:-1]]  # each person's first counted frame of the batch
+        before = np.where(first, self._was_matched[slot], np.r_[False, matched[:-1]])
+        np.add.at(self._counted, slot, 1)
+        np.add.at(self._matched, slot, matched)
+        np.add.at(self._runs, slot, matched & ~before)
+        self._was_matched[slot] = matched  # the last write per person is their latest frame's
+        keys, together = np.unique(pair_key(self._persons(pair_g), self._hyp_slots(pair_h)), return_counts=True)
+        pairs = self._pairs(keys)
+        self._together = grown(self._together, len(self._pairs))
+        self._together[pairs] += together
 
     def _trajectories(self) -> dict:
         """MT, PT, ML and fragmentations of the ground-truth persons over the frames they count in."""
+        self._absorb()
         n = len(self._persons)
         ratio = self._matched[:n] / self._counted[:n]
         return {"mt": int((ratio > 0.8).sum()), "pt": int(((ratio >= 0.2) & (ratio <= 0.8)).sum()),
@@ -277,6 +296,7 @@ class ClearMot:
     def _identity(self) -> dict:
         """IDF1, IDP, IDR: the best one-to-one assignment of gt ids to hypothesis ids over the sequence (a sparse
         maximum-weight matching of the pairs ever within the threshold)."""
+        self._absorb()
         together = self._together[:len(self._pairs)]
         idtp = int(together[max_weight_matching(*split_pair_key(self._pairs.keys), together)].sum())
         gt, hyps = self._gt, self._hyps

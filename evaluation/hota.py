@@ -46,7 +46,7 @@ __all__ = ["Hota", "hota", "ALPHAS", "same_frame_pairs", "close_pairs", "matchin
 
 ALPHAS = np.arange(1, 20) / 20  # 0.05 ... 0.95
 _TOL = 1e-12  # a similarity this close below alpha still counts (rounding of d / scale)
-_CHUNK = 1 << 20  # candidate pairs generated at once (memory bound)
+_CHUNK = 1 << 18  # candidate pairs generated at once (memory bound: a few MB)
 _EMPTY_I = np.zeros(0, np.int64)
 
 

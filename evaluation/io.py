@@ -20,7 +20,7 @@ import numpy as np
 from .sequence import Sequence
 
 REQUIRED = ("frame", "id", "x", "y")
-CHUNK_ROWS = 1 << 16  # rows parsed at once: a few MB, whatever the file's length
+CHUNK_ROWS = 1 << 14  # rows parsed at once (about 170 frames of the airport): a few MB, whatever the file's length
 
 
 class EvaluationInputError(ValueError):
@@ -46,10 +46,11 @@ def table_chunks(path, required: tuple[str, ...] = REQUIRED, chunk_rows: int = C
             names = _header(path, f, required)
             first = True
             while True:
-                lines = [line for line in itertools.islice(f, chunk_rows) if line.strip()]
-                if not lines and not first:
+                raw = list(itertools.islice(f, chunk_rows))
+                if not raw and not first:
                     return
                 first = False
+                lines = [line for line in raw if line.strip()]
                 try:
                     data = np.loadtxt(lines, delimiter=",", ndmin=2) if lines else np.zeros((0, len(names)))
                 except ValueError as e:

@@ -98,6 +98,7 @@ def test_state_grows_with_persons_and_tracks_not_with_frames():
         cm, h, o = ClearMot(), Hota(), Ospa()
         for frame in range(frames):
             cm.update(ids[:3], xy[:3], ids[:3] + 10, xy[:3] + 0.1)
+        assert cm.summary()["mt"] == 3
         h.count(gt, tracks)
         o.count(gt, tracks)
         return (len(cm._persons), len(cm._pairs), len(h.gt_ids), len(h.pairs), len(o.pairs), o.sums["ospa"].count,
@@ -125,6 +126,14 @@ def test_slots_are_dense_in_order_of_first_appearance():
     assert slots(np.array([-3, 7, 9])).tolist() == [2, 0, 3]
     assert slots(np.array([8, 9]), add=False).tolist() == [-1, 3]
     assert slots.keys.tolist() == [7, 50, -3, 9]
+
+
+def test_blank_lines_anywhere_are_skipped(tmp_path):
+    path = tmp_path / "gt.csv"
+    path.write_text("frame,id,x,y\n0,1,0,0\n\n\n\n\n0,2,1,0\n\n\n\n\n1,1,0,0\n\n")
+    for rows in (1, 2, 3, 100):
+        chunks = list(sequence_chunks(path, chunk_rows=rows))
+        assert [(c.frame.tolist(), c.id.tolist()) for c in chunks] == [([0, 0], [1, 2]), ([1], [1])]
 
 
 def test_a_file_out_of_frame_order_gets_one_clear_error(tmp_path):
