@@ -8,6 +8,8 @@ chunks (evaluation/score.py), and the top-down picture keeps at most ``PICTURE_S
 
 from __future__ import annotations
 
+import ctypes
+import gc
 import json
 import math
 import time
@@ -180,13 +182,16 @@ def run(scenario: dict, out: Path, rrd: bool = False, progress: bool = True) -> 
 
 def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     from .plot import plot_run
-    from .recording import Recording
 
     sim = Simulation(scenario)
     start = time.perf_counter()
     sim.warm_up()
     warmup_s = time.perf_counter() - start
-    recording = Recording(tmp / "recording.rrd", wall_segments(scenario), sim) if rrd else None
+    recording = None
+    if rrd:
+        from .recording import Recording  # rerun, imported only for a recording: 50 MB of memory
+
+        recording = Recording(tmp / "recording.rrd", wall_segments(scenario), sim)
     sensors = [laser.name for laser in sim.lasers] + [camera.name for camera in (*sim.depth_cameras,
                                                                                  *sim.wall_cameras)]
     csv = {"groundtruth": CsvWriter(tmp / "groundtruth.csv", GT_HEADER),
@@ -223,10 +228,15 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     if recording:
         recording.close()
     timing = sim.timing
+    cameras = {camera.name: camera.backend for camera in (*sim.depth_cameras, *sim.wall_cameras)}
     # the scenario as run, every default filled in: a scenario file that runs again as it is
     resolved = _without_unset({key: value for key, value in scenario.items() if key != "source"})
     (tmp / "scenario.yaml").write_text(f"# resolved from {scenario['source']}\n"
                                        + yaml.safe_dump(resolved, sort_keys=False))
+    plot_run(tmp / "topdown.png", wall_segments(scenario), picture, f"{scenario['name']}, seed {scenario['seed']}")
+    # the simulation and the picture are done with: what they held goes back before the scoring needs memory
+    del sim, recording, picture
+    release_memory()
     # scored from the files as written, so that `crowdsim evaluate` on them gives the same figures
     tracking = score_tracking(CsvPair(tmp / "groundtruth.csv", tmp / "tracks.csv"),
                               scenario["evaluation"]["threshold"])
@@ -239,7 +249,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         "groundtruth": {"mean_persons_in_range": persons / frames if frames else 0.0,
                         "max_persons_in_range": most},
         # which renderer drew each camera: egl or osmesa (MuJoCo's OpenGL), or raycast where no GL context was had
-        "cameras": {camera.name: camera.backend for camera in (*sim.depth_cameras, *sim.wall_cameras)},
+        "cameras": cameras,
         "timing": {
             "wall_s": timing.wall_s,
             "realtime_factor": duration / timing.wall_s if timing.wall_s > 0 else float("inf"),
@@ -257,5 +267,14 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         f"{metrics['groundtruth']['mean_persons_in_range']:.1f} on average, "
         f"{metrics['groundtruth']['max_persons_in_range']} at most.{cameras_line(metrics, ' ')}\n\n"
         "![top-down view](topdown.png)\n")
-    plot_run(tmp / "topdown.png", wall_segments(scenario), picture, f"{scenario['name']}, seed {scenario['seed']}")
     return metrics
+
+
+def release_memory() -> None:
+    """Collect what is no longer referenced and give the freed heap back to the system: glibc's malloc keeps it
+    otherwise, and a long run's peak is its scoring on top of the loop's leftovers."""
+    gc.collect()
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):  # not glibc: nothing to give back this way
+        pass

@@ -67,7 +67,7 @@ import numpy as np
 from evaluation.assignment import ospa_t_labels
 from evaluation.hota import check_ids, close_pairs, matching_by_frame, same_frame_pairs
 from evaluation.sequence import Sequence, frames_of
-from evaluation.tables import ExactSum, Slots, grown, pair_key, split_pair_key
+from evaluation.tables import Counts, ExactSum, Slots, grown, pair_key, split_pair_key
 
 __all__ = ["Ospa", "ospa"]
 
@@ -96,10 +96,10 @@ class Ospa:
             raise ValueError("label_penalty must be finite and >= 0")
         self.cp = self.c ** self.p
         self.sums = {name: ExactSum() for name in ("ospa", "localisation", "cardinality", "ospa_t")}
-        self.gt_ids, self.track_ids, self.pairs = Slots(), Slots(), Slots()
+        self.gt_ids, self.track_ids, self.close = Slots(), Slots(), Slots()
         self.n_g = self.n_t = np.zeros(0, np.int64)  # frames each gt (track) id is present in
-        self.both = np.zeros(0, np.int64)  # frames each pair is present together
-        self.saving = np.zeros(0)  # per pair: the sum over frames of c^p - d^p where d < c
+        self.together = Counts()  # frames each pair of a gt id and a track id is present together
+        self.saving = np.zeros(0)  # per pair ever within c: the sum over frames of c^p - d^p where d < c
         self.labels = self.assigned = None  # per track slot: the gt id it is labelled with, and whether it is
 
     def _frames(self, gt: Sequence, tracks: Sequence):
@@ -127,21 +127,23 @@ class Ospa:
         np.add.at(self.n_g, g, 1)
         np.add.at(self.n_t, t, 1)
         for pg, pt in same_frame_pairs(gt, tracks):
-            keys, together = np.unique(pair_key(g[pg], t[pt]), return_counts=True)
-            slot = self.pairs(keys)
-            self.both = grown(self.both, len(self.pairs))
-            self.both[slot] += together
-        self.saving = grown(self.saving, len(self.pairs))
-        np.add.at(self.saving, self.pairs(pair_key(g[gi], t[ti]), add=False), cp - dp)  # in frame order
+            self.together.add(pair_key(g[pg], t[pt]))
+        close = self.close(pair_key(g[gi], t[ti]))
+        self.saving = grown(self.saving, len(self.close))
+        np.add.at(self.saving, close, cp - dp)  # in frame order
         return {"frame": frames, "ospa": o, "localisation": loc, "cardinality": card}
 
     def label(self) -> None:
         """Between the passes: OSPA-T step 1 (module docstring), one global assignment of track ids to gt ids,
-        solved on the pairs (evaluation/assignment.py)."""
-        g, t = split_pair_key(self.pairs.keys)
-        n = len(self.pairs)
-        gt_slot, track_slot = ospa_t_labels(self.n_g[:len(self.gt_ids)], self.n_t[:len(self.track_ids)], g, t,
-                                            self.both[:n], self.saving[:n], self.cp)
+        solved on the pairs (evaluation/assignment.py); what only it needed is let go."""
+        keys = self.together.keys
+        w = self.together.counts * self.cp  # the pair's weight: cp both + saving (OSPA-T's step 1, in ospa_t_labels)
+        np.add.at(w, np.searchsorted(keys, self.close.keys), self.saving[:len(self.close)])  # close pairs: together
+        self.together = self.close = self.saving = None
+        g, t = (half.astype(np.int32) for half in split_pair_key(keys))
+        del keys
+        gt_slot, track_slot = ospa_t_labels(self.n_g[:len(self.gt_ids)], self.n_t[:len(self.track_ids)], g, t, w,
+                                            self.cp)
         self.labels = np.zeros(len(self.track_ids), np.int64)
         self.assigned = np.zeros(len(self.track_ids), bool)
         self.labels[track_slot] = self.gt_ids.keys[gt_slot]

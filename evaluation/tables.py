@@ -47,6 +47,25 @@ class Slots:
         return slot[inverse.reshape(-1)]
 
 
+class Counts:
+    """How often each int64 key was seen: keys in ascending order and their counts, 12 bytes a key (for the pairs
+    of persons and tracks ever in one frame: more than a million in an hour-long run)."""
+
+    def __init__(self):
+        self.keys = _EMPTY_I
+        self.counts = np.zeros(0, np.int32)
+
+    def add(self, keys: np.ndarray) -> None:
+        keys, counts = np.unique(keys, return_counts=True)
+        at = np.searchsorted(self.keys, keys)
+        found = at < len(self.keys)
+        found[found] = self.keys[at[found]] == keys[found]
+        self.counts[at[found]] += counts[found].astype(np.int32)
+        if not found.all():
+            self.keys = np.insert(self.keys, at[~found], keys[~found])
+            self.counts = np.insert(self.counts, at[~found], counts[~found].astype(np.int32))
+
+
 def pair_key(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """One int64 key per pair of slots (each below 2^31)."""
     return (np.asarray(a, np.int64) << 32) | np.asarray(b, np.int64)

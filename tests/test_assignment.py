@@ -70,6 +70,11 @@ def test_matching_equals_dense(integer):
 # ospa_t_labels (OSPA-T step 1)
 
 
+def labels(n_g, n_t, l, r, both, saving, cp=1.0):
+    """ospa_t_labels from the pairs' frames together and savings, as OSPA-T's statistics come."""
+    return ospa_t_labels(n_g, n_t, l, r, cp * np.asarray(both, float) + saving, cp)
+
+
 def test_ospa_t_hand_worked_loser_takes_the_cheapest_free_track():
     # Two people present 5 frames each; track 0 follows both (5 frames present, 5 together with each), closer to
     # person 0 (saving 4) than to person 1 (saving 2); tracks 1 and 2 (3 and 2 frames) meet nobody. cp = 1.
@@ -78,24 +83,24 @@ def test_ospa_t_hand_worked_loser_takes_the_cheapest_free_track():
     # free track, 2 (7): 8; the other way round 3 + 7 = 10.
     n_g, n_t = np.array([5, 5]), np.array([5, 3, 2])
     l, r, both, saving = np.array([0, 1]), np.array([0, 0]), np.array([5, 5]), np.array([4.0, 2.0])
-    gi, ti = ospa_t_labels(n_g, n_t, l, r, both, saving)
+    gi, ti = labels(n_g, n_t, l, r, both, saving)
     np.testing.assert_array_equal(gi, [0, 1])
     np.testing.assert_array_equal(ti, [0, 2])
     # The same with the roles swapped (more gt ids than tracks): every track assigned, sorted by gt index.
-    gi, ti = ospa_t_labels(n_t, n_g, r, l, both, saving)
+    gi, ti = labels(n_t, n_g, r, l, both, saving)
     np.testing.assert_array_equal(gi, [0, 2])
     np.testing.assert_array_equal(ti, [0, 1])
 
 
 def test_ospa_t_empty_sides():
     for n_g, n_t in (([], [3, 4]), ([3, 4], []), ([], [])):
-        gi, ti = ospa_t_labels(np.array(n_g), np.array(n_t), np.zeros(0, int), np.zeros(0, int), np.zeros(0),
+        gi, ti = labels(np.array(n_g), np.array(n_t), np.zeros(0, int), np.zeros(0, int), np.zeros(0),
                                np.zeros(0))
         assert gi.size == ti.size == 0
 
 
 def test_ospa_t_without_pairs_takes_the_cheapest_tracks():
-    gi, ti = ospa_t_labels(np.array([4, 9]), np.array([7, 1, 3, 2]), np.zeros(0, int), np.zeros(0, int),
+    gi, ti = labels(np.array([4, 9]), np.array([7, 1, 3, 2]), np.zeros(0, int), np.zeros(0, int),
                            np.zeros(0), np.zeros(0))
     np.testing.assert_array_equal(gi, [0, 1])
     assert sorted(ti) == [1, 3]
@@ -125,7 +130,7 @@ def test_ospa_t_equals_dense(kind, shape):
         n_gt, n_tr = {"wide": (small, large), "tall": (large, small), "square": (large, large)}[shape]
         cp = 1.0 if kind != "float" else float(rng.choice([0.5, 1.0, 2.5]))
         inst = random_ospa_t(rng, n_gt, n_tr, kind)
-        gi, ti = ospa_t_labels(*inst, cp=cp)
+        gi, ti = labels(*inst, cp=cp)
         assert gi.size == ti.size == min(n_gt, n_tr)
         assert_one_to_one(gi, ti)
         assert np.all(np.diff(gi) > 0)
@@ -143,7 +148,7 @@ def test_ospa_t_balances_tied_optima(monkeypatch):
     rng = np.random.default_rng(7)
     for _ in range(300):
         inst = random_ospa_t(rng, 30, 12, "integer")
-        gi, ti = ospa_t_labels(*inst)
+        gi, ti = labels(*inst)
         cost = dense_ospa_t_cost(*inst, 1.0)
         i, j = linear_sum_assignment(cost)
         assert cost[gi, ti].sum() == cost[i, j].sum()
