@@ -135,7 +135,8 @@ class CsvWriter:
 
 class Picture:
     """What the top-down picture draws, kept for every ``stride``-th cycle: ground truth and tracks as world-frame
-    rows (frame, id, x, y), the robot's path, and every few cycles the whole crowd (id, x, y)."""
+    rows (frame, id, x, y), the robot's path, and every few cycles the whole crowd (id, x, y); in single precision
+    (positions to micrometres and ids up to 16 million exactly, in half the memory)."""
 
     def __init__(self, stride: int):
         self.stride = stride
@@ -144,11 +145,11 @@ class Picture:
     def add(self, frame) -> None:
         if frame.index % self.stride:
             return
-        self.gt.append(_world_rows(frame.index, frame.groundtruth, frame.world_T_odom))
-        self.tracks.append(_world_rows(frame.index, frame.tracks, frame.world_T_odom))
+        self.gt.append(_world_rows(frame.index, frame.groundtruth, frame.world_T_odom).astype(np.float32))
+        self.tracks.append(_world_rows(frame.index, frame.tracks, frame.world_T_odom).astype(np.float32))
         self.robot.append(frame.robot_pose)
         if frame.index % (CROWD_EVERY * self.stride) == 0:  # everyone, in range or not
-            self.crowd.append(np.column_stack([frame.agents.id, frame.agents.position]))
+            self.crowd.append(np.column_stack([frame.agents.id, frame.agents.position]).astype(np.float32))
 
 
 def _world_rows(index: int, persons, world_T_odom: np.ndarray) -> np.ndarray:

@@ -39,6 +39,13 @@ M a matching of the pairs, g(M) the rows it leaves to the hub; a sparse LAPJVsp 
    alternating paths and cycles, each of cost change 0, and swapping them over one at a time moves the right slope
    by at most 1 (a path has two ends), so it reaches a balanced M (``_balance``).
 
+4. Most pairs cannot matter: at a price lam a row prefers the hub to a pair whose max(b_j, lam) - w_ij > lam, so
+   the pairs with b_j - w_ij > reach are of no use at any lam <= reach (a track that spends many frames away from
+   the person). The search runs on the others, reach starting at the lowest level of b; when the maximiser it finds
+   lies at or below reach, L there is the same with every pair (those left out are above the hub's price), and 2
+   certifies the assignment; otherwise reach is raised to that maximiser's level and the search run again. On an
+   hour-long airport run 335,000 of 1.5 million pairs are searched, once.
+
 Ties: b and w are integers for pairs never within c, so L often peaks at a level of b, where the slopes jump; a peak
 computed within rounding of a level is moved onto it.
 
@@ -193,12 +200,12 @@ def _balance(a: _Matching, z: _Matching, n: int, cols: np.ndarray, b: np.ndarray
 
 
 def _search(n: int, rows: np.ndarray, cols: np.ndarray, w: np.ndarray, b: np.ndarray,
-            snap: float) -> tuple[float, np.ndarray]:
-    """L at a maximiser and a balanced optimal matching there (module docstring, 3)."""
+            snap: float) -> tuple[float, float, np.ndarray]:
+    """A maximiser of L, L there, and a balanced optimal matching there (module docstring, 3)."""
     levels = np.unique(b)
     lo = _Matching(n, rows, cols, w, b, float(levels[0]))  # left slope >= 0: no column is cheaper
     if lo.balanced(lo.lam):
-        return lo.value, lo.picked
+        return lo.lam, lo.value, lo.picked
     hi = None  # at the top level every unused column is as cheap: right slope <= 0, the maximisers lie below
     for _ in range(_MAX_STEPS):
         # lo (right slope > 0) and hi (left slope < 0) bracket the maximisers. Until a hi is found, U_lo's peak is
@@ -207,12 +214,12 @@ def _search(n: int, rows: np.ndarray, cols: np.ndarray, w: np.ndarray, b: np.nda
         lam, bound = _peak(lo, hi, float(levels[-1]) if hi is None else hi.lam, levels, snap)
         new = _Matching(n, rows, cols, w, b, lam)
         if new.balanced(lam):
-            return new.value, new.picked
+            return lam, new.value, new.picked
         if new.value >= bound - snap:  # L reaches the peak of its bounds: lam maximises L
             optimal = [m for m in (new, lo, hi) if m is not None and m.upper(lam) <= new.value + snap]
             a = max(optimal, key=lambda m: m.slopes(lam)[1])
             z = min(optimal, key=lambda m: m.slopes(lam)[0])
-            return new.value, _balance(a, z, n, cols, b, lam)
+            return lam, new.value, _balance(a, z, n, cols, b, lam)
         lo, hi = (new, hi) if new.slopes(lam)[0] > 0 else (lo, new)
     raise RuntimeError("ospa_t_labels: the cutting-plane search did not converge")
 
@@ -255,7 +262,15 @@ def ospa_t_labels(n_g: np.ndarray, n_t: np.ndarray, l: np.ndarray, r: np.ndarray
     if not (w > 0).all():  # a pair never present together and never close is no pair
         rows, cols, w = rows[w > 0], cols[w > 0], w[w > 0]
     scale = cp * float(n_g.sum() + n_t.sum())  # bounds the total cost
-    bound, picked = _search(n, rows, cols, w, b, _SNAP * scale)
+    levels = np.unique(b)
+    reach = levels[0]
+    while True:  # solved on the edges a row could prefer to the hub at a price up to reach (module docstring, 4)
+        useful = b[cols] - w <= reach
+        lam, bound, picked = _search(n, rows[useful], cols[useful], w[useful], b, _SNAP * scale)
+        if lam <= reach or useful.all():
+            break
+        reach = levels[np.searchsorted(levels, lam)]
+    rows, cols, w = rows[useful], cols[useful], w[useful]
     mate = _complete(picked, cols, b)
     cost = float(b[mate].sum() - w[picked[picked >= 0]].sum())
     if cost - bound > _CERT_TOL * scale:

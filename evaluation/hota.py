@@ -167,7 +167,7 @@ class Hota:
         self.n_g = self.n_t = np.zeros(0, np.int64)  # frames each gt (track) id is present in
         self.potential = np.zeros(0)  # soft count of potential matches per pair
         self.alignment = None
-        self.hits = np.zeros((0, ALPHAS.size + 1), np.int64)  # per pair: matches by the number of alphas <= S
+        self.hits = np.zeros((0, ALPHAS.size + 1), np.int32)  # per pair: matches by the number of alphas <= S
         self.loc_sum = np.zeros(ALPHAS.size + 1)  # summed S of the matches, by the same number
         self.gt_points = self.track_points = 0
 
@@ -196,7 +196,7 @@ class Hota:
         pot = self.potential[:len(self.pairs)]
         with np.errstate(invalid="ignore"):
             self.alignment = pot / (self.n_g[g] + self.n_t[t] - pot)
-        self.hits = np.zeros((len(self.pairs), ALPHAS.size + 1), np.int64)
+        self.hits = np.zeros((len(self.pairs), ALPHAS.size + 1), np.int32)
 
     def match(self, gt: Sequence, tracks: Sequence) -> None:
         """Pass 2 (steps 2-3): one matching per frame on A * S, and the matches counted per pair and alpha."""
@@ -221,7 +221,7 @@ class Hota:
         g, t = split_pair_key(self.pairs.keys[used])
         order = np.lexsort((self.track_ids.keys[t], self.gt_ids.keys[g]))  # by (gt id, track id)
         used, g, t = used[order], g[order], t[order]
-        tpa = np.cumsum(self.hits[used][:, ::-1], axis=1)[:, ::-1][:, 1:]  # [pairs, alpha]: TPs per id pair
+        tpa = np.cumsum(self.hits[used][:, ::-1], axis=1, dtype=np.int64)[:, ::-1][:, 1:]  # [pairs, alpha]: TPs
         tp = tpa.sum(axis=0)
         loc_sum = np.cumsum(self.loc_sum[::-1])[::-1][1:]
         ass_sum = (tpa * tpa / ((self.n_g[g] + self.n_t[t])[:, None] - tpa)).sum(axis=0)

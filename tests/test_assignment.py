@@ -153,3 +153,23 @@ def test_ospa_t_balances_tied_optima(monkeypatch):
         i, j = linear_sum_assignment(cost)
         assert cost[gi, ti].sum() == cost[i, j].sum()
     assert len(calls) >= 3
+
+
+def test_ospa_t_searches_again_with_more_pairs_where_the_price_lands_above_its_reach(monkeypatch):
+    # The first search sees only the pairs useful below the lowest level of b; where its maximiser lies above that,
+    # the search runs again with the pairs useful up to there, and still finds the dense optimum.
+    searches = []
+    search = assignment._search
+    monkeypatch.setattr(assignment, "_search", lambda n, rows, *a: searches.append(rows.size) or search(n, rows, *a))
+    rng = np.random.default_rng(11)
+    again = 0
+    for _ in range(200):
+        searches.clear()
+        inst = random_ospa_t(rng, int(rng.integers(1, 25)), int(rng.integers(1, 25)), "integer")
+        gi, ti = labels(*inst)
+        cost = dense_ospa_t_cost(*inst, 1.0)
+        i, j = linear_sum_assignment(cost)
+        assert cost[gi, ti].sum() == cost[i, j].sum()
+        again += len(searches) > 1
+        assert searches == sorted(searches)  # each search sees at least the pairs of the one before
+    assert again >= 20
