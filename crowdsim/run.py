@@ -8,8 +8,6 @@ chunks (evaluation/score.py), and the top-down picture keeps at most ``PICTURE_S
 
 from __future__ import annotations
 
-import ctypes
-import gc
 import json
 import math
 import time
@@ -19,6 +17,7 @@ import numpy as np
 import yaml
 from tqdm import tqdm
 
+from evaluation.heap import release_memory
 from evaluation.score import score_tracking, tracking_table
 from evaluation.stream import CsvPair
 from pipeline.frames import compose, inverse
@@ -44,7 +43,7 @@ CROWD_EVERY = 5  # tracking cycles between the crowd snapshots drawn in the top-
 # the top-down picture draws every cycle of a run this long or shorter, and every k-th cycle of a run k times as
 # long, so it holds at most this much of the run
 PICTURE_SECONDS = 120.0
-BLOCK_ROWS = 1 << 14  # rows a CSV gathers before they are written
+BLOCK_ROWS = 1 << 12  # rows a CSV gathers before they are written
 
 
 def _rows(frame_index: int, stamp: float, persons) -> np.ndarray:
@@ -100,7 +99,8 @@ def _visibility_rows(frame, written: dict[str, float]) -> list[np.ndarray]:
 
 class CsvWriter:
     """A CSV written as its rows come, a block at a time (the bytes are those ``np.savetxt`` of all rows at once
-    would write). ``names``: for a column of indices, the names written in their place."""
+    would write). ``names``: for a column of indices, the names written in their place. The rows gather in one
+    buffer made once: a long run's small arrays, kept between blocks, would scatter over the heap and grow it."""
 
     def __init__(self, path: Path, header: str, fmt: list[str] | None = None, names: dict[int, list[str]] = None):
         self.file = open(path, "w")
@@ -108,25 +108,27 @@ class CsvWriter:
         self.fmt = fmt or ["%d", "%.2f"] + ["%d" if name in INTEGER_COLUMNS else "%.4f"
                                             for name in header.split(",")[2:]]
         self.names = {column: np.array(values, object) for column, values in (names or {}).items()}
-        self.block: list[np.ndarray] = []
+        self.buffer = np.empty((BLOCK_ROWS, len(self.fmt)))
         self.rows = 0
 
     def write(self, rows: np.ndarray) -> None:
-        self.block.append(rows)
-        self.rows += len(rows)
-        if self.rows >= BLOCK_ROWS:
-            self.flush()
+        while len(rows):
+            n = min(len(rows), BLOCK_ROWS - self.rows)
+            self.buffer[self.rows:self.rows + n] = rows[:n]
+            self.rows += n
+            rows = rows[n:]
+            if self.rows == BLOCK_ROWS:
+                self.flush()
 
     def flush(self) -> None:
-        if self.block:
-            table = np.concatenate(self.block)
-            if self.names:
-                table = table.astype(object)
-                for column, names in self.names.items():
-                    table[:, column] = names[table[:, column].astype(int)]
-            # one format over the whole block: the text ``np.savetxt`` writes row by row, in one string
-            self.file.write((",".join(self.fmt) + "\n") * len(table) % tuple(table.ravel().tolist()))
-        self.block, self.rows = [], 0
+        table = self.buffer[:self.rows]
+        if self.names:
+            table = table.astype(object)
+            for column, names in self.names.items():
+                table[:, column] = names[table[:, column].astype(int)]
+        # one format over the whole block: the text ``np.savetxt`` writes row by row, in one string
+        self.file.write((",".join(self.fmt) + "\n") * len(table) % tuple(table.ravel().tolist()))
+        self.rows = 0
 
     def close(self) -> None:
         self.flush()
@@ -182,8 +184,6 @@ def run(scenario: dict, out: Path, rrd: bool = False, progress: bool = True) -> 
 
 
 def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
-    from .plot import plot_run
-
     sim = Simulation(scenario)
     start = time.perf_counter()
     sim.warm_up()
@@ -234,13 +234,16 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     resolved = _without_unset({key: value for key, value in scenario.items() if key != "source"})
     (tmp / "scenario.yaml").write_text(f"# resolved from {scenario['source']}\n"
                                        + yaml.safe_dump(resolved, sort_keys=False))
-    plot_run(tmp / "topdown.png", wall_segments(scenario), picture, f"{scenario['name']}, seed {scenario['seed']}")
-    # the simulation and the picture are done with: what they held goes back before the scoring needs memory
-    del sim, recording, picture
+    # the simulation is done with: what it held goes back before the scoring needs memory
+    del sim, recording
     release_memory()
     # scored from the files as written, so that `crowdsim evaluate` on them gives the same figures
     tracking = score_tracking(CsvPair(tmp / "groundtruth.csv", tmp / "tracks.csv"),
                               scenario["evaluation"]["threshold"])
+    release_memory()  # and the scoring's memory before the drawing's
+    from .plot import plot_run  # matplotlib, imported once the scoring is done: 20 MB less at its peak
+
+    plot_run(tmp / "topdown.png", wall_segments(scenario), picture, f"{scenario['name']}, seed {scenario['seed']}")
     metrics = {
         "scenario": scenario["name"],
         "seed": scenario["seed"],
@@ -269,13 +272,3 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         f"{metrics['groundtruth']['max_persons_in_range']} at most.{cameras_line(metrics, ' ')}\n\n"
         "![top-down view](topdown.png)\n")
     return metrics
-
-
-def release_memory() -> None:
-    """Collect what is no longer referenced and give the freed heap back to the system: glibc's malloc keeps it
-    otherwise, and a long run's peak is its scoring on top of the loop's leftovers."""
-    gc.collect()
-    try:
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):  # not glibc: nothing to give back this way
-        pass

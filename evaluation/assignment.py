@@ -56,6 +56,8 @@ lowest level), 19,000 and 6,000 5 s (13 solves); under 100 MB beyond the inputs.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
+
 import numpy as np
 from scipy.sparse import csr_array
 from scipy.sparse.csgraph import connected_components, min_weight_full_bipartite_matching
@@ -235,7 +237,28 @@ def _complete(picked: np.ndarray, cols: np.ndarray, b: np.ndarray) -> np.ndarray
     return mate
 
 
-def ospa_t_labels(n_g: np.ndarray, n_t: np.ndarray, l: np.ndarray, r: np.ndarray, w: np.ndarray,
+def _edges_within(pairs, flip: bool, b: np.ndarray, reach: float):
+    """The edges (rows, cols, w) of the pairs with w > 0 (a pair never present together and never close is none)
+    and b[col] - w <= reach, sorted by row (stably), and whether that is every edge."""
+    rows, cols, weights, left_out = [], [], [], 0
+    for l, r, w in pairs():
+        row, col = (r, l) if flip else (l, r)
+        w = np.asarray(w, np.float64)
+        edge = w > 0
+        keep = edge & (b[col] - w <= reach)
+        left_out += int(np.count_nonzero(edge)) - int(np.count_nonzero(keep))
+        rows.append(np.asarray(row, np.int32)[keep])
+        cols.append(np.asarray(col, np.int32)[keep])
+        weights.append(w[keep])
+    rows, cols, w = (np.concatenate(parts) if parts else np.zeros(0, dtype)
+                     for parts, dtype in ((rows, np.int32), (cols, np.int32), (weights, np.float64)))
+    if rows.size and (rows[1:] < rows[:-1]).any():  # by row (pairs in key order are by gt already)
+        order = np.argsort(rows, kind="stable")
+        rows, cols, w = rows[order], cols[order], w[order]
+    return rows, cols, w, left_out == 0
+
+
+def ospa_t_labels(n_g: np.ndarray, n_t: np.ndarray, pairs: Callable[[], Iterable[tuple]],
                   cp: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """OSPA-T step 1 (ospa.py) from per-id and per-pair frame statistics: the assignment minimising the sum of
 
@@ -243,34 +266,26 @@ def ospa_t_labels(n_g: np.ndarray, n_t: np.ndarray, l: np.ndarray, r: np.ndarray
 
     over the assigned pairs, every id of the smaller side assigned, returned as ``linear_sum_assignment(cost)`` does:
     (gt indices, track indices), sorted by gt index. ``n_g``, ``n_t``: frames each gt id, track id is present;
-    ``l``, ``r``: gt and track index of each pair ever present in one frame (unique, the gt indices ascending
-    where the gt ids are the fewer: then no copy is sorted); ``both``: frames both are present; ``saving``: sum over
-    those frames of cp - min(c, d)^p; ``cp``: c^p. Method and proof: module docstring. Raises RuntimeError if the
-    optimality certificate fails (float rounding beyond 1e-9 of the total's scale)."""
+    ``pairs()``: the pairs ever present in one frame, each once, as blocks (l, r, w) of gt index, track index and
+    weight (``both``: frames both are present; ``saving``: sum over those frames of cp - min(c, d)^p); it is called
+    once per price bound tried (module docstring, 4), so that all the pairs are never in memory at once, and the
+    gt indices ascending where the gt ids are the fewer sort nothing; ``cp``: c^p. Method and proof: module
+    docstring. Raises RuntimeError if the optimality certificate fails (float rounding beyond 1e-9 of the total's
+    scale)."""
     n_g, n_t = np.asarray(n_g, np.float64), np.asarray(n_t, np.float64)
     flip = n_g.size > n_t.size  # rows: the smaller side, each of them assigned
     n, b = (n_t.size, cp * n_g) if flip else (n_g.size, cp * n_t)
     if n == 0:
         return _EMPTY_I, _EMPTY_I
-    rows, cols = (np.asarray(r, np.int32), np.asarray(l, np.int32)) if flip else (np.asarray(l, np.int32),
-                                                                                   np.asarray(r, np.int32))
-    w = np.asarray(w, np.float64)
-    if rows.size and (rows[1:] < rows[:-1]).any():  # the edges by row (pairs in key order are by gt already)
-        order = np.argsort(rows, kind="stable")
-        rows, cols, w = rows[order], cols[order], w[order]
-        del order
-    if not (w > 0).all():  # a pair never present together and never close is no pair
-        rows, cols, w = rows[w > 0], cols[w > 0], w[w > 0]
     scale = cp * float(n_g.sum() + n_t.sum())  # bounds the total cost
     levels = np.unique(b)
     reach = levels[0]
     while True:  # solved on the edges a row could prefer to the hub at a price up to reach (module docstring, 4)
-        useful = b[cols] - w <= reach
-        lam, bound, picked = _search(n, rows[useful], cols[useful], w[useful], b, _SNAP * scale)
-        if lam <= reach or useful.all():
+        rows, cols, w, every = _edges_within(pairs, flip, b, reach)
+        lam, bound, picked = _search(n, rows, cols, w, b, _SNAP * scale)
+        if lam <= reach or every:
             break
         reach = levels[np.searchsorted(levels, lam)]
-    rows, cols, w = rows[useful], cols[useful], w[useful]
     mate = _complete(picked, cols, b)
     cost = float(b[mate].sum() - w[picked[picked >= 0]].sum())
     if cost - bound > _CERT_TOL * scale:

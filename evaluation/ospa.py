@@ -136,14 +136,22 @@ class Ospa:
     def label(self) -> None:
         """Between the passes: OSPA-T step 1 (module docstring), one global assignment of track ids to gt ids,
         solved on the pairs (evaluation/assignment.py); what only it needed is let go."""
-        keys = self.together.keys
-        w = self.together.counts * self.cp  # the pair's weight: cp both + saving (OSPA-T's step 1, in ospa_t_labels)
-        np.add.at(w, np.searchsorted(keys, self.close.keys), self.saving[:len(self.close)])  # close pairs: together
-        self.together = self.close = self.saving = None
-        g, t = (half.astype(np.int32) for half in split_pair_key(keys))
-        del keys
-        gt_slot, track_slot = ospa_t_labels(self.n_g[:len(self.gt_ids)], self.n_t[:len(self.track_ids)], g, t, w,
+        close = self.close.keys
+        order = np.argsort(close)
+        close, saving = close[order], self.saving[:len(close)][order]
+
+        def pairs():  # each pair's weight: cp both + saving (OSPA-T's step 1), a segment at a time
+            for keys, counts in zip(self.together.keys, self.together.counts):
+                if not len(keys):
+                    continue
+                w = counts * self.cp
+                lo, hi = np.searchsorted(close, keys[0]), np.searchsorted(close, keys[-1], side="right")
+                w[np.searchsorted(keys, close[lo:hi])] += saving[lo:hi]  # close pairs: together too
+                yield *split_pair_key(keys), w
+
+        gt_slot, track_slot = ospa_t_labels(self.n_g[:len(self.gt_ids)], self.n_t[:len(self.track_ids)], pairs,
                                             self.cp)
+        self.together = self.close = self.saving = None
         self.labels = np.zeros(len(self.track_ids), np.int64)
         self.assigned = np.zeros(len(self.track_ids), bool)
         self.labels[track_slot] = self.gt_ids.keys[gt_slot]

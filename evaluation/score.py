@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .clearmot import ClearMot, score_frames
+from .heap import release_memory
 from .hota import Hota
 from .ospa import Ospa
 
@@ -48,8 +49,10 @@ def score_tracking(frames, threshold: float = 1.0) -> dict:
         h.count(gt, tracks)
         o.count(gt, tracks)
     tracking = cm.summary()
+    release_memory()  # what the first pass's chunks left in the heap, before the labelling's arrays
     h.align()
     o.label()
+    release_memory()
     for gt, tracks in counted_chunks(frames, threshold)[0]:
         h.match(gt, tracks)
         o.score(gt, tracks)

@@ -48,22 +48,51 @@ class Slots:
 
 
 class Counts:
-    """How often each int64 key was seen: keys in ascending order and their counts, 12 bytes a key (for the pairs
-    of persons and tracks ever in one frame: more than a million in an hour-long run)."""
+    """How often each int64 key was seen, 12 bytes a key (for the pairs of persons and tracks ever in one frame:
+    more than a million in an hour-long run). The keys are kept in order in segments of up to ``2 * segment`` keys:
+    a new key copies its segment only, never all of them (ids come and go, so the new keys of a stretch of frames
+    fall in a few segments)."""
 
-    def __init__(self):
-        self.keys = _EMPTY_I
-        self.counts = np.zeros(0, np.int32)
+    def __init__(self, segment: int = 1 << 16):
+        self.segment = segment
+        self.keys: list[np.ndarray] = []  # per segment, ascending; each segment's keys below the next one's
+        self.counts: list[np.ndarray] = []  # int32, per segment
+        self._first = _EMPTY_I  # the first key of each segment but the first
+
+    def __len__(self) -> int:
+        return sum(len(k) for k in self.keys)
 
     def add(self, keys: np.ndarray) -> None:
         keys, counts = np.unique(keys, return_counts=True)
-        at = np.searchsorted(self.keys, keys)
-        found = at < len(self.keys)
-        found[found] = self.keys[at[found]] == keys[found]
-        self.counts[at[found]] += counts[found].astype(np.int32)
-        if not found.all():
-            self.keys = np.insert(self.keys, at[~found], keys[~found])
-            self.counts = np.insert(self.counts, at[~found], counts[~found].astype(np.int32))
+        counts = counts.astype(np.int32)
+        if not self.keys:
+            self.keys, self.counts = [keys[:0]], [counts[:0]]
+        bounds = np.searchsorted(keys, self._first)  # where each segment's keys begin among ``keys``
+        for s, (lo, hi) in enumerate(zip(np.r_[0, bounds], np.r_[bounds, len(keys)])):
+            if lo == hi:
+                continue
+            k, c, seg = keys[lo:hi], counts[lo:hi], self.keys[s]
+            at = np.searchsorted(seg, k)
+            found = at < len(seg)
+            found[found] = seg[at[found]] == k[found]
+            self.counts[s][at[found]] += c[found]
+            if not found.all():
+                self.keys[s] = np.insert(seg, at[~found], k[~found])
+                self.counts[s] = np.insert(self.counts[s], at[~found], c[~found])
+        if max(len(k) for k in self.keys) > 2 * self.segment:
+            self._split()
+
+    def _split(self) -> None:
+        keys, counts = [], []
+        for k, c in zip(self.keys, self.counts):
+            if len(k) > 2 * self.segment:
+                keys += [k[i:i + self.segment].copy() for i in range(0, len(k), self.segment)]
+                counts += [c[i:i + self.segment].copy() for i in range(0, len(k), self.segment)]
+            else:
+                keys.append(k)
+                counts.append(c)
+        self.keys, self.counts = keys, counts
+        self._first = np.array([k[0] for k in keys[1:]], np.int64)
 
 
 def pair_key(a: np.ndarray, b: np.ndarray) -> np.ndarray:

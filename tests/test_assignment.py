@@ -71,8 +71,9 @@ def test_matching_equals_dense(integer):
 
 
 def labels(n_g, n_t, l, r, both, saving, cp=1.0):
-    """ospa_t_labels from the pairs' frames together and savings, as OSPA-T's statistics come."""
-    return ospa_t_labels(n_g, n_t, l, r, cp * np.asarray(both, float) + saving, cp)
+    """ospa_t_labels from the pairs' frames together and savings, as OSPA-T's statistics come: in three blocks."""
+    w = cp * np.asarray(both, float) + saving
+    return ospa_t_labels(n_g, n_t, lambda: zip(*(np.array_split(a, 3) for a in (l, r, w))), cp)
 
 
 def test_ospa_t_hand_worked_loser_takes_the_cheapest_free_track():

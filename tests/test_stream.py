@@ -13,7 +13,7 @@ from evaluation.io import EvaluationInputError, load_sequence, sequence_chunks
 from evaluation.ospa import Ospa
 from evaluation.score import score_tracking
 from evaluation.stream import CsvPair, SequencePair, aligned
-from evaluation.tables import ExactSum, Slots
+from evaluation.tables import Counts, ExactSum, Slots
 
 
 def run_like(seed: int, frames: int = 60, persons: int = 12):
@@ -101,7 +101,7 @@ def test_state_grows_with_persons_and_tracks_not_with_frames():
         assert cm.summary()["mt"] == 3
         h.count(gt, tracks)
         o.count(gt, tracks)
-        return (len(cm._persons), len(cm._pairs), len(h.gt_ids), len(h.pairs), len(o.together.keys),
+        return (len(cm._persons), len(cm._pairs), len(h.gt_ids), len(h.pairs), len(o.together),
                 o.sums["ospa"].count, len(o.sums["ospa"]._partials) <= 2)
 
     short, long = sizes(10), sizes(1000)
@@ -118,6 +118,19 @@ def test_exact_sum_is_the_correctly_rounded_sum_in_any_order():
             s.add(part)
         assert s.total == math.fsum(values) and s.count == len(values)
     assert ExactSum().mean() is None
+
+
+def test_counts_kept_in_segments_are_the_counts_of_all_keys_at_once():
+    rng = np.random.default_rng(3)
+    batches = [rng.integers(0, 5000, rng.integers(0, 300)) for _ in range(60)]
+    counts = Counts(segment=16)
+    for batch in batches:
+        counts.add(batch)
+    keys, n = np.unique(np.concatenate(batches), return_counts=True)
+    assert len(counts) == len(keys) and len(counts.keys) > 20  # split into many segments
+    assert max(len(k) for k in counts.keys) <= 32
+    assert np.array_equal(np.concatenate(counts.keys), keys)
+    assert np.array_equal(np.concatenate(counts.counts), n)
 
 
 def test_slots_are_dense_in_order_of_first_appearance():
