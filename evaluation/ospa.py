@@ -71,6 +71,8 @@ from evaluation.tables import Counts, ExactSum, Slots, grown, pair_key, split_pa
 
 __all__ = ["Ospa", "ospa"]
 
+_GRID_CELLS = 1 << 20  # a chunk's pairs are counted on its (gt ids x track ids) grid up to this size (8 MB)
+
 
 def _per_frame(n: np.ndarray, m: np.ndarray, gain_sum: np.ndarray, cp: float, p: float):
     """(OSPA, localisation part) per frame from the sizes n >= m and the summed gains c^p - base^p of the matched
@@ -126,12 +128,26 @@ class Ospa:
         self.n_g, self.n_t = grown(self.n_g, len(self.gt_ids)), grown(self.n_t, len(self.track_ids))
         np.add.at(self.n_g, g, 1)
         np.add.at(self.n_t, t, 1)
-        for pg, pt in same_frame_pairs(gt, tracks):
-            self.together.add(pair_key(g[pg], t[pt]))
+        self._count_together(g, t, gt, tracks)
         close = self.close(pair_key(g[gi], t[ti]))
         self.saving = grown(self.saving, len(self.close))
         np.add.at(self.saving, close, cp - dp)  # in frame order
         return {"frame": frames, "ospa": o, "localisation": loc, "cardinality": card}
+
+    def _count_together(self, g: np.ndarray, t: np.ndarray, gt: Sequence, tracks: Sequence) -> None:
+        """Frames together of each pair of a gt slot ``g`` and a track slot ``t`` (per row) present in one frame:
+        counted on the chunk's (gt ids x track ids) grid where that is small, which needs no sort."""
+        gu, gl = np.unique(g, return_inverse=True)
+        tu, tl = np.unique(t, return_inverse=True)
+        grid = np.zeros(gu.size * tu.size, np.int64) if gu.size * tu.size <= _GRID_CELLS else None
+        for pg, pt in same_frame_pairs(gt, tracks):
+            if grid is None:
+                self.together.add(pair_key(g[pg], t[pt]))
+            else:
+                grid += np.bincount(gl[pg] * tu.size + tl[pt], minlength=grid.size)
+        if grid is not None:
+            cell = np.flatnonzero(grid)  # row-major over ascending slots: the keys come ascending
+            self.together.add_counts(pair_key(gu[cell // tu.size], tu[cell % tu.size]), grid[cell])
 
     def label(self) -> None:
         """Between the passes: OSPA-T step 1 (module docstring), one global assignment of track ids to gt ids,

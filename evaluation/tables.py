@@ -63,7 +63,10 @@ class Counts:
         return sum(len(k) for k in self.keys)
 
     def add(self, keys: np.ndarray) -> None:
-        keys, counts = np.unique(keys, return_counts=True)
+        self.add_counts(*np.unique(keys, return_counts=True))
+
+    def add_counts(self, keys: np.ndarray, counts: np.ndarray) -> None:
+        """Add ``counts`` to ``keys`` (ascending, each once)."""
         counts = counts.astype(np.int32)
         if not self.keys:
             self.keys, self.counts = [keys[:0]], [counts[:0]]

@@ -10,7 +10,7 @@ import pytest
 from evaluation import ClearMot, Sequence
 from evaluation.hota import Hota
 from evaluation.io import EvaluationInputError, load_sequence, sequence_chunks
-from evaluation.ospa import Ospa
+from evaluation.ospa import Ospa, ospa
 from evaluation.score import score_tracking
 from evaluation.stream import CsvPair, SequencePair, aligned
 from evaluation.tables import Counts, ExactSum, Slots
@@ -131,6 +131,16 @@ def test_counts_kept_in_segments_are_the_counts_of_all_keys_at_once():
     assert max(len(k) for k in counts.keys) <= 32
     assert np.array_equal(np.concatenate(counts.keys), keys)
     assert np.array_equal(np.concatenate(counts.counts), n)
+
+
+def test_ospa_counts_the_pairs_together_the_same_on_its_grid_and_by_sorting(monkeypatch):
+    import evaluation.ospa
+
+    gt, tracks = run_like(4, frames=80, persons=15)
+    gt = gt.select(~gt.ignore)
+    on_grid = ospa(gt, tracks)
+    monkeypatch.setattr(evaluation.ospa, "_GRID_CELLS", 0)  # every chunk too large for the grid
+    assert ospa(gt, tracks) == on_grid and on_grid["labelled_tracks"] > 5
 
 
 def test_slots_are_dense_in_order_of_first_appearance():
