@@ -71,7 +71,7 @@ from evaluation.tables import Counts, ExactSum, Slots, grown, pair_key, split_pa
 
 __all__ = ["Ospa", "ospa"]
 
-_GRID_CELLS = 1 << 20  # a chunk's pairs are counted on its (gt ids x track ids) grid up to this size (8 MB)
+_GRID_CELLS = 1 << 18  # a chunk's pairs are counted on its (gt ids x track ids) grid up to this size (2 MB)
 
 
 def _per_frame(n: np.ndarray, m: np.ndarray, gain_sum: np.ndarray, cp: float, p: float):
