@@ -139,15 +139,15 @@ class Ospa:
         counted on the chunk's (gt ids x track ids) grid where that is small, which needs no sort."""
         gu, gl = np.unique(g, return_inverse=True)
         tu, tl = np.unique(t, return_inverse=True)
-        grid = np.zeros(gu.size * tu.size, np.int64) if gu.size * tu.size <= _GRID_CELLS else None
-        for pg, pt in same_frame_pairs(gt, tracks):
-            if grid is None:
+        if gu.size * tu.size > _GRID_CELLS:
+            for pg, pt in same_frame_pairs(gt, tracks):
                 self.together.add(pair_key(g[pg], t[pt]))
-            else:
-                grid += np.bincount(gl[pg] * tu.size + tl[pt], minlength=grid.size)
-        if grid is not None:
-            cell = np.flatnonzero(grid)  # row-major over ascending slots: the keys come ascending
-            self.together.add_counts(pair_key(gu[cell // tu.size], tu[cell % tu.size]), grid[cell])
+            return
+        grid = np.zeros(gu.size * tu.size, np.int64)
+        for pg, pt in same_frame_pairs(gt, tracks):
+            grid += np.bincount(gl[pg] * tu.size + tl[pt], minlength=grid.size)
+        cell = np.flatnonzero(grid)  # row-major over ascending slots: the keys come ascending
+        self.together.add_counts(pair_key(gu[cell // tu.size], tu[cell % tu.size]), grid[cell])
 
     def label(self) -> None:
         """Between the passes: OSPA-T step 1 (module docstring), one global assignment of track ids to gt ids,

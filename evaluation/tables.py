@@ -15,6 +15,14 @@ import numpy as np
 _EMPTY_I = np.zeros(0, np.int64)
 
 
+def _find(ascending: np.ndarray, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where each of ``keys`` is, or would go, in ``ascending``, and whether it is there."""
+    at = np.searchsorted(ascending, keys)
+    found = at < len(ascending)
+    found[found] = ascending[at[found]] == keys[found]
+    return at, found
+
+
 class Slots:
     """A dense slot number for every int64 key seen so far (an id, or a ``pair_key``): slots are given in order of
     first appearance (the new keys of one call in ascending order), so per-key state lives in plain arrays."""
@@ -33,9 +41,7 @@ class Slots:
         if keys.size == 0:
             return _EMPTY_I
         unique, inverse = np.unique(keys, return_inverse=True)
-        at = np.searchsorted(self._sorted, unique)
-        found = at < len(self._sorted)
-        found[found] = self._sorted[at[found]] == unique[found]
+        at, found = _find(self._sorted, unique)
         slot = np.full(len(unique), -1, np.int64)
         slot[found] = self._slot[at[found]]
         if add and not found.all():
@@ -75,9 +81,7 @@ class Counts:
             if lo == hi:
                 continue
             k, c, seg = keys[lo:hi], counts[lo:hi], self.keys[s]
-            at = np.searchsorted(seg, k)
-            found = at < len(seg)
-            found[found] = seg[at[found]] == k[found]
+            at, found = _find(seg, k)
             self.counts[s][at[found]] += c[found]
             if not found.all():
                 self.keys[s] = np.insert(seg, at[~found], k[~found])

@@ -96,7 +96,7 @@ def test_ospa_t_hand_worked_loser_takes_the_cheapest_free_track():
 def test_ospa_t_empty_sides():
     for n_g, n_t in (([], [3, 4]), ([3, 4], []), ([], [])):
         gi, ti = labels(np.array(n_g), np.array(n_t), np.zeros(0, int), np.zeros(0, int), np.zeros(0),
-                               np.zeros(0))
+                        np.zeros(0))
         assert gi.size == ti.size == 0
 
 
