@@ -27,12 +27,7 @@ class Robot:
     def step(self, v: float, omega: float, dt: float) -> None:
         """Move by the command, limited in speed and acceleration, with exact arc integration; integrate the
         odometry with its errors."""
-        p = self.p
-        dv, dw = p["max_acceleration"] * dt, p["max_angular_acceleration"] * dt
-        v = float(np.clip(v, self.velocity[0] - dv, self.velocity[0] + dv))
-        omega = float(np.clip(omega, self.velocity[1] - dw, self.velocity[1] + dw))
-        v = float(np.clip(v, -p["max_speed"], p["max_speed"]))
-        omega = float(np.clip(omega, -p["max_angular_speed"], p["max_angular_speed"]))
+        v, omega = (float(c) for c in limited(np.array([v, omega]), self.velocity, self.p, dt))
         self.pose = compose(self.pose, arc(v, omega, dt))
         distance, turn = self.measured_motion(v * dt, omega * dt)
         self.odom_pose = compose(self.odom_pose, arc(distance / dt, turn / dt, dt))
@@ -78,10 +73,20 @@ class Robot:
         return v, omega
 
 
-def arc(v: float, omega: float, dt: float) -> np.ndarray:
-    """The pose increment of a differential drive moving at (v, omega) for dt."""
+def limited(command: np.ndarray, velocity: np.ndarray, p: dict, dt: float) -> np.ndarray:
+    """Commands (v, omega) [..., 2] as the drive executes them after ``velocity`` [..., 2]: within the acceleration
+    limits of one step ``dt``, then within the speed limits."""
+    step = np.array([p["max_acceleration"], p["max_angular_acceleration"]]) * dt
+    top = np.array([p["max_speed"], p["max_angular_speed"]])
+    return np.clip(np.clip(command, velocity - step, velocity + step), -top, top)
+
+
+def arc(v, omega, dt: float) -> np.ndarray:
+    """The pose increment [..., 3] of a differential drive moving at (v, omega) (scalars or arrays) for dt."""
+    v, omega = np.asarray(v, float), np.asarray(omega, float)
     th = omega * dt
-    if abs(th) < 1e-9:
-        return np.array([v * dt, 0.0, th])
-    r = v / omega
-    return np.array([r * np.sin(th), r * (1 - np.cos(th)), th])
+    straight = np.abs(th) < 1e-9
+    r = v / np.where(straight, 1.0, omega)
+    x = np.where(straight, v * dt, r * np.sin(th))
+    y = np.where(straight, 0.0, r * (1 - np.cos(th)))
+    return np.stack([x, y, th], axis=-1)

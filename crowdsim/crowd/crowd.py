@@ -14,14 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from scenarios.geometry import near_segments, pair_vectors, segments_cross, wall_segments
+from scenarios.geometry import segments_cross, wall_segments
 
 from . import forces
 from .behaviours import (AgentTypes, Attractions, Escapes, GroupIds, PerAgent, Queues, Routes, Sources, place_clusters,
                          place_standing)
-from .contacts import ContactSolver
+from .contacts import ContactSolver, push_out_of_walls
 
-WALL_PASSES = 4  # push-out passes; two walls of a corner may each need one
 ARRIVAL_RADIUS = 0.3  # m: standing people slow down within this distance of their spot, and return to it when pushed
 
 # the per-agent arrays of the crowd itself (the behaviours add theirs), with the value a newcomer gets
@@ -173,25 +172,6 @@ class Crowd:
             acc += self.rng.normal(0.0, p["random_force"], acc.shape)
         return acc
 
-    # -- contacts -----------------------------------------------------------------------------------------------
-
-    def _push_out_of_walls(self, pos: np.ndarray):
-        """Move every body that overlaps a wall out along the wall's normal, the deepest overlap first (summing
-        pushes from the two walls of a corner would over-correct); a few passes settle corners."""
-        if len(self.walls) == 0 or len(pos) == 0:
-            return
-        for _ in range(WALL_PASSES):
-            p, s = near_segments(pos, self.walls, self.radius)
-            away, dist = pair_vectors(pos, self.walls, p, s)
-            depth = self.radius[p] - dist
-            inside = depth > 0
-            if not inside.any():
-                return
-            p, away, dist, depth = p[inside], away[inside], dist[inside], depth[inside]
-            order = np.lexsort((-depth, p))
-            first = order[np.unique(p[order], return_index=True)[1]]  # each body's deepest wall
-            pos[p[first]] += (depth[first] / np.maximum(dist[first], 1e-12))[:, None] * away[first]
-
     # -- stepping -----------------------------------------------------------------------------------------------
 
     def step(self, dt: float, robot_pos: np.ndarray | None = None, robot_radius: float = 0.0) -> None:
@@ -216,7 +196,7 @@ class Crowd:
                 robot_vel = (robot_pos - self._robot_pos) / dt
             parked = np.array([1e6, 1e6])  # no robot in this simulation: its disc waits far away
             self.pos = self.contacts.step(self.pos, vel, dt, parked if robot_pos is None else robot_pos, robot_vel)
-            self._push_out_of_walls(self.pos)  # Chipmunk tolerates a little overlap; walls get none
+            push_out_of_walls(self.pos, self.radius, self.walls)  # Chipmunk tolerates a little overlap; walls get none
             # pushes from a dense crowd can carry a body across a thin wall within one step: such a body stays put
             crossed = segments_cross(before, self.pos, self.walls)
             self.pos[crossed] = before[crossed]
