@@ -141,17 +141,7 @@ class Crowd:
         tree = cKDTree(self.pos, balanced_tree=False, compact_nodes=False) if n > 1 else None
         pairs = (tree.query_pairs(p["interaction_range"], output_type="ndarray") if n > 1
                  else np.zeros((0, 2), np.int64))
-        if len(pairs) == 0:
-            return np.zeros((n, 2))
-        if p["interaction"] == "moussaid2009":
-            return forces.moussaid2009(self.pos, self.vel, pairs, p["moussaid_strength"], p["moussaid_lambda"],
-                                       p["moussaid_gamma"], p["moussaid_n"], p["moussaid_n_prime"],
-                                       walking=~self.holding, direction=e, fov_deg=p["fov_deg"],
-                                       out_of_view=p["out_of_view_weight"])
-        i = np.concatenate([pairs[:, 0], pairs[:, 1]])
-        j = np.concatenate([pairs[:, 1], pairs[:, 0]])
-        return forces.helbing_molnar1995(self.pos, self.vel, e, i, j, p["agent_strength"], p["agent_range"],
-                                         p["step_time"], p["fov_deg"], p["out_of_view_weight"])
+        return forces.pair_forces(p, self.pos, self.vel, e, pairs, walking=~self.holding)
 
     def acceleration(self, e: np.ndarray, speed: np.ndarray, robot_pos: np.ndarray | None,
                      robot_radius: float) -> np.ndarray:

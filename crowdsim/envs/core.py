@@ -1,0 +1,215 @@
+"""The environments' episodes, batched: E worlds (``world.Worlds``), each robot's lasers and people pipeline, the
+observations, the reward, the ends of episodes and their logs. ``gym.Env`` and the vector environment are thin
+shells round one of these (E = 1 and E = n), so their episodes are the same.
+
+Every random draw of world k comes from the generator its environment was reset with (``reset(k, generator)``),
+through child generators spawned from it in a fixed order: the layout and the crowd's random force, the laser's
+noise. Nothing reads a global generator.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pipeline.assemble import build_pipeline
+from pipeline.frames import compose, inverse, transform_points
+from pipeline.fusion import to_frame
+from scenarios import scenario_from_dict
+from sensors import Laser, Scene, parts_at
+from sensors.body import body_scale
+
+from .layouts import LAYOUTS
+from .observe import Observer
+from .reward import Reward
+from .world import Worlds
+
+TASKS = ("navigate", "follow")
+MODES = ("truth", "laser", "tracks")
+GOAL_RADIUS = 0.3  # m: the goal is reached when the robot's centre is this near (CrowdNav: within the robot radius)
+
+# The robot, its laser and its pipeline: the scenario defaults (the SPENCER-like platform, a SICK LMS500 at 0.70 m,
+# seed 000's segment detector and NNT), with one laser seeing all round, as the airport's two back to back lasers do
+ENV_SCENARIO = {
+    "name": "env",
+    "robot": {"start": [0.0, 0.0, 0.0]},
+    "sensors": {"lasers": [{"name": "laser", "mount": [0.0, 0.0, 0.0], "fov_deg": 360.0, "resolution_deg": 1.0,
+                            "range_max": 20.0}]},
+}
+
+
+@dataclass
+class Config:
+    """What ``gymnasium.make`` chooses; ``reset(options=...)`` may change ``scenario``, ``people`` and
+    ``robot_visible``."""
+
+    task: str = "navigate"
+    observation: tuple[str, ...] = ("truth",)
+    scenario: str = "passers_by"
+    people: int = 20
+    robot_visible: bool = True  # CrowdNav's published results used an invisible robot: False gives that
+    control_period: float = 0.2  # s, 5 ticks of 0.04 s
+    time_limit: float = 30.0  # s
+    k_nearest: int = 10
+    reward: str | dict = "default"
+    scenario_overrides: dict = field(default_factory=dict)  # keys laid over ENV_SCENARIO (robot limits, laser)
+
+    def __post_init__(self):
+        if self.task not in TASKS:
+            raise ValueError(f"task: expected one of {TASKS}, got {self.task!r}")
+        obs = (self.observation,) if isinstance(self.observation, str) else tuple(self.observation)
+        bad = [m for m in obs if m not in MODES]
+        if not obs or bad:
+            raise ValueError(f"observation: expected one or more of {MODES}, got {self.observation!r}")
+        self.observation = obs
+        if self.scenario not in LAYOUTS:
+            raise ValueError(f"scenario: expected one of {sorted(LAYOUTS)}, got {self.scenario!r}")
+        if int(self.people) != self.people or self.people < 0:
+            raise ValueError(f"people: expected a whole number >= 0, got {self.people!r}")
+        if self.k_nearest < 1:
+            raise ValueError(f"k_nearest: expected at least 1, got {self.k_nearest}")
+        if self.time_limit <= 0:
+            raise ValueError(f"time_limit: expected seconds above 0, got {self.time_limit}")
+
+
+class Episodes:
+    """E episodes stepped together."""
+
+    def __init__(self, n: int, config: Config):
+        self.n, self.config = n, config
+        raw = {**ENV_SCENARIO, **config.scenario_overrides}
+        self.scenario = scenario_from_dict(raw, source="<environment scenario>")
+        self.ticks = int(round(config.control_period / self.scenario["dt"]))
+        if self.ticks < 1 or abs(self.ticks * self.scenario["dt"] - config.control_period) > 1e-9:
+            raise ValueError(f"control_period: expected a whole number of {self.scenario['dt']} s ticks, "
+                             f"got {config.control_period}")
+        self.sensing = "laser" in config.observation or "tracks" in config.observation
+        self.observer = Observer(config, self.scenario)
+        self.reward = Reward(config.reward, config.task)
+        self.generators: list[np.random.Generator | None] = [None] * n
+        self._build()
+
+    def _build(self) -> None:
+        """The worlds, and per world its laser's scene and its pipeline (only when an observation needs them)."""
+        c = self.config
+        self.worlds = Worlds(self.n, c.people, c.scenario, self.scenario, c.robot_visible)
+        self.noise_rng: list[np.random.Generator | None] = [None] * self.n
+        self.scenes, self.lasers, self.pipelines = [], [], []
+        self.tracks = [None] * self.n
+        self.scans = [None] * self.n
+        self.start = np.zeros((self.n, 3))
+        self.elapsed = np.zeros(self.n)
+        self.distance = np.zeros(self.n)
+        self.min_gap = np.full(self.n, np.inf)
+        self.log: list[list] = [[] for _ in range(self.n)]
+
+    def apply_options(self, options: dict | None) -> None:
+        """``scenario``, ``people`` and ``robot_visible`` from a reset's options: the worlds are made anew."""
+        if not options:
+            return
+        unknown = set(options) - {"scenario", "people", "robot_visible", "reset_mask"}
+        if unknown:
+            raise ValueError(f"options: unknown key(s) {sorted(unknown)}; expected scenario, people, robot_visible")
+        changed = {k: options[k] for k in ("scenario", "people", "robot_visible") if k in options}
+        if changed:
+            self.config = Config(**{**self.config.__dict__, **changed})
+            self._build()
+
+    def reset(self, k: int, generator: np.random.Generator) -> None:
+        """Start episode k over with ``generator`` (the environment's ``np_random``)."""
+        self.generators[k] = generator
+        layout_rng, noise_rng, laser_rng = generator.spawn(3)
+        self.noise_rng[k] = noise_rng
+        self.worlds.reset(k, layout_rng)
+        self.start[k] = self.worlds.robot_pose[k]
+        self.elapsed[k] = 0.0
+        self.min_gap[k] = np.inf
+        self.distance[k] = self._goal_distance(k)
+        if self.sensing:
+            self._reset_sensing(k, laser_rng)
+        self.log[k] = []
+        self._log(k)
+
+    def _reset_sensing(self, k: int, rng: np.random.Generator) -> None:
+        laser_p = self.scenario["sensors"]["lasers"][0]
+        if len(self.scenes) < self.n:  # made once per world and kept: a MuJoCo model takes milliseconds to make
+            w = self.worlds
+            for _ in range(self.n):
+                scene = Scene(w.walls, w.robot_radius, max(w.N, 1), parts_at(laser_p["height"]))
+                self.scenes.append(scene)
+                self.lasers.append(None)
+                self.pipelines.append(build_pipeline(self.scenario["pipeline"], [laser_p["name"]]))
+        self.lasers[k] = Laser(laser_p, self.scenes[k], rng)
+        self.pipelines[k].reset()
+        self._sense(k)
+
+    def _goal_distance(self, k: int) -> float:
+        w = self.worlds
+        return float(np.hypot(*(w.goal[k] - w.robot_pose[k, :2])))
+
+    def odom_pose(self, k: int) -> np.ndarray:
+        """The robot's pose in odom (exact odometry: the world pose relative to the start)."""
+        return compose(inverse(self.start[k]), self.worlds.robot_pose[k])
+
+    def _sense(self, k: int) -> None:
+        """World k's laser scan and, when tracks are observed, one cycle of its pipeline."""
+        w, laser = self.worlds, self.lasers[k]
+        ids = np.arange(1, w.N + 1)
+        self.scenes[k].sync(w.robot_pose[k], ids, w.position[k], w.velocity[k], w.walked[k],
+                            body_scale(ids, w.radius[k]))
+        stamp = float(w.t[k])
+        scan = laser.scan(stamp, w.robot_pose[k])
+        self.scans[k] = scan
+        if "tracks" in self.config.observation:
+            pipe = self.pipelines[k]
+            dets = to_frame(pipe.detectors[laser.name].detect(scan), laser.pose_in(self.odom_pose(k)), "odom")
+            self.tracks[k] = pipe.tracker.update(stamp, pipe.fusion.fuse({laser.name: dets}))
+
+    def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict]]:
+        """One control period for every episode: actions [E, 2] in [-1, 1] scaled to the robot's limits. Returns
+        rewards, terminated, truncated [E] and one info per episode."""
+        w, p = self.worlds, self.scenario["robot"]
+        a = np.clip(np.asarray(actions, float).reshape(self.n, 2), -1.0, 1.0)
+        command = a * np.array([p["max_speed"], p["max_angular_speed"]])
+        noise = np.stack([g.normal(0.0, w.crowd_p["random_force"], (self.ticks, 2, w.N)) for g in self.noise_rng], 2)
+        gap = np.full(self.n, np.inf)
+        for t in range(self.ticks):
+            gap = np.minimum(gap, w.tick(command, noise[t]))
+        self.elapsed += self.ticks * w.dt
+        self.min_gap = np.minimum(self.min_gap, gap)
+        if self.sensing:
+            for k in range(self.n):
+                self._sense(k)
+        before = self.distance.copy()
+        self.distance = np.hypot(*(w.goal - w.robot_pose[:, :2]).T)
+        collided = gap < 0
+        reached = (self.distance < GOAL_RADIUS) & ~collided if self.config.task == "navigate" else np.zeros(self.n, bool)
+        terminated = collided | reached
+        truncated = ~terminated & (self.elapsed >= self.config.time_limit - 1e-9)
+        rewards, terms = self.reward(self, before, gap, reached, collided)
+        infos = []
+        for k in range(self.n):
+            self._log(k)
+            info = {"reward_terms": {name: float(v[k]) for name, v in terms.items()}, "collision": bool(collided[k]),
+                    "success": bool(reached[k]), "time": float(self.elapsed[k])}
+            if terminated[k] or truncated[k]:
+                info["episode_metrics"] = self.episode_summary(k, bool(reached[k]), bool(collided[k]))
+            infos.append(info)
+        return rewards, terminated, truncated, infos
+
+    def _log(self, k: int) -> None:
+        w = self.worlds
+        self.log[k].append((float(self.elapsed[k]), w.robot_pose[k].copy(), w.position[k].copy(),
+                            w.velocity[k].copy()))
+
+    def episode_summary(self, k: int, success: bool, collided: bool) -> dict:
+        """The episode's outcome and the robot's path (the navigation metrics come with the evaluation's module)."""
+        poses = np.array([entry[1] for entry in self.log[k]])
+        return {"success": success, "collision": collided, "timeout": not (success or collided),
+                "time": float(self.elapsed[k]), "path_length": float(np.linalg.norm(np.diff(poses[:, :2], axis=0),
+                                                                                    axis=1).sum()),
+                "min_gap": float(self.min_gap[k])}
+
+    def observe(self) -> dict[str, np.ndarray]:
+        return self.observer(self)

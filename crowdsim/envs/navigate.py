@@ -1,0 +1,159 @@
+"""``crowdsim/Navigate-v0`` and ``crowdsim/Follow-v0``: the gymnasium shells round ``core.Episodes``.
+
+``CrowdEnv`` is one episode (``Episodes`` of one world); ``CrowdVectorEnv`` steps n of them in one batched call
+(gymnasium's ``vector_entry_point``, with the three autoreset modes gymnasium defines). Sub-environment i of a
+vector environment reset with seed s is the single environment reset with seed s + i, step for step.
+
+Actions: (v, omega) in [-1, 1]^2, scaled to the robot's speed limits (its acceleration limits then apply).
+An episode ends ``terminated`` on reaching the goal or touching a person or a wall, ``truncated`` at the time limit;
+the last step's info holds ``episode_metrics``.
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from .core import Config, Episodes
+from .render import top_down
+
+ACTION_SPACE = spaces.Box(-1.0, 1.0, (2,), np.float32)
+
+
+def _config(task: str, kwargs: dict) -> Config:
+    defaults = {"time_limit": 60.0, "scenario": "following", "people": 10} if task == "follow" else {}
+    return Config(task=task, **{**defaults, **kwargs})
+
+
+class CrowdEnv(gym.Env):
+    """One robot among a crowd (see the module docstring); ``make`` keywords are ``core.Config``'s fields."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 5}
+
+    def __init__(self, task: str = "navigate", render_mode: str | None = None, **kwargs):
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
+        self.render_mode = render_mode
+        self.episodes = Episodes(1, _config(task, kwargs))
+        self.observation_space = self.episodes.observer.space
+        self.action_space = ACTION_SPACE
+        self.metadata = {**self.metadata, "render_fps": 1.0 / self.episodes.config.control_period}
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        self.episodes.apply_options(options)
+        self.episodes.reset(0, self.np_random)
+        return _row(self.episodes.observe(), 0), {}
+
+    def step(self, action):
+        rewards, terminated, truncated, infos = self.episodes.step(np.asarray(action, float)[None])
+        return _row(self.episodes.observe(), 0), float(rewards[0]), bool(terminated[0]), bool(truncated[0]), infos[0]
+
+    def render(self):
+        if self.render_mode == "rgb_array":
+            return top_down(self.episodes, 0)
+        return None
+
+
+class CrowdVectorEnv(VectorEnv):
+    """n episodes stepped as one (``core.Episodes`` of n worlds)."""
+
+    metadata = {"render_modes": ["rgb_array"], "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    def __init__(self, num_envs: int = 1, task: str = "navigate", render_mode: str | None = None,
+                 autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP, **kwargs):
+        if num_envs < 1:
+            raise ValueError(f"num_envs: expected at least 1, got {num_envs}")
+        self.num_envs = num_envs
+        self.render_mode = render_mode
+        self.episodes = Episodes(num_envs, _config(task, kwargs))
+        self.single_observation_space = self.episodes.observer.space
+        self.single_action_space = ACTION_SPACE
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        self.autoreset_mode = AutoresetMode(autoreset_mode)
+        self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
+        self._generators: list[np.random.Generator | None] = [None] * num_envs
+        self._needs_reset = np.zeros(num_envs, bool)
+
+    def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None):
+        """Reset every episode (or those of ``options["reset_mask"]``): sub-environment i with ``seed + i`` (or the
+        i-th of a list of seeds), else continuing its own generator."""
+        mask = np.ones(self.num_envs, bool) if not options or "reset_mask" not in options else np.asarray(
+            options["reset_mask"], bool)
+        if mask.shape != (self.num_envs,):
+            raise ValueError(f"options['reset_mask']: expected {self.num_envs} booleans, got shape {mask.shape}")
+        seeds = ([seed + i for i in range(self.num_envs)] if isinstance(seed, int)
+                 else list(seed) if seed is not None else [None] * self.num_envs)
+        if len(seeds) != self.num_envs:
+            raise ValueError(f"seed: expected an int or {self.num_envs} seeds, got {len(seeds)}")
+        self.episodes.apply_options({k: v for k, v in (options or {}).items() if k != "reset_mask"})
+        for i in np.flatnonzero(mask):
+            self._reset_one(int(i), seeds[i])
+        self._needs_reset[mask] = False
+        return self.episodes.observe(), {}
+
+    def _reset_one(self, i: int, seed: int | None) -> None:
+        if seed is not None or self._generators[i] is None:
+            self._generators[i], _ = seeding.np_random(seed)
+        self.episodes.reset(i, self._generators[i])
+
+    def step(self, actions):
+        actions = np.asarray(actions, float).reshape(self.num_envs, 2)
+        restart = self._needs_reset.copy()
+        rewards, terminated, truncated, infos = self.episodes.step(actions)
+        if self.autoreset_mode == AutoresetMode.NEXT_STEP and restart.any():
+            # the episodes that ended last step start over now; their action is ignored
+            for i in np.flatnonzero(restart):
+                self._reset_one(int(i), None)
+            rewards[restart], terminated[restart], truncated[restart] = 0.0, False, False
+            infos = [{} if restart[i] else info for i, info in enumerate(infos)]
+        ended = terminated | truncated
+        info = _merge(infos)
+        if self.autoreset_mode == AutoresetMode.SAME_STEP and ended.any():
+            final_obs = self.episodes.observe()
+            for i in np.flatnonzero(ended):
+                self._reset_one(int(i), None)
+            info["final_obs"] = _masked(final_obs, ended)
+            info["final_info"] = _merge([info_i if ended[i] else {} for i, info_i in enumerate(infos)])
+            info["_final_obs"] = info["_final_info"] = ended.copy()
+        self._needs_reset = ended if self.autoreset_mode == AutoresetMode.NEXT_STEP else np.zeros(self.num_envs,
+                                                                                                      bool)
+        return self.episodes.observe(), rewards, terminated, truncated, info
+
+    def render(self):
+        if self.render_mode == "rgb_array":
+            return tuple(top_down(self.episodes, i) for i in range(self.num_envs))
+        return None
+
+
+def _row(batch: dict[str, np.ndarray], i: int) -> dict[str, np.ndarray]:
+    return {name: value[i] for name, value in batch.items()}
+
+
+def _masked(batch: dict[str, np.ndarray], mask: np.ndarray) -> np.ndarray:
+    """Per sub-environment its observation where ``mask``, else None (gymnasium's ``final_obs``)."""
+    out = np.empty(len(mask), dtype=object)
+    for i in range(len(mask)):
+        out[i] = _row(batch, i) if mask[i] else None
+    return out
+
+
+def _merge(infos: list[dict]) -> dict:
+    """Per-sub-environment infos as gymnasium's vector info: each key an array over sub-environments, with
+    ``_key`` marking where it is set."""
+    out: dict = {}
+    n = len(infos)
+    for i, info in enumerate(infos):
+        for key, value in info.items():
+            if key not in out:
+                kind = type(value)
+                out[key] = (np.zeros(n, dtype=kind) if kind in (bool, int, float) else np.full(n, None, dtype=object))
+                out["_" + key] = np.zeros(n, bool)
+            out[key][i] = value
+            out["_" + key][i] = True
+    return out

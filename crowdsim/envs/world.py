@@ -1,0 +1,202 @@
+"""Many small worlds stepped as one: the environments' crowds and robots on arrays over every world at once.
+
+A gym step is a few simulation ticks, and one world of 10-20 people is too small for numpy to pay off: a tick of
+the scenario crowd (``crowdsim.crowd.Crowd``) costs about 1 ms at 20 people, nearly all of it per-call overhead.
+Here E worlds of N people each live in [E, N] arrays and every tick is one set of array calls over all of them,
+with the crowd's force model and parameters (Moussaid et al. 2009 between persons, ``forces.moussaid2009_dense``;
+Helbing, Farkas & Vicsek 2000 from the walls; the robot's disc; Helbing & Molnar's field of view) between the persons
+of each world. One environment is the same code with E = 1, so a batched world is the single environment's world,
+bit for bit: every sum runs over one person's own world, in the same order.
+
+What the scenario crowd has and these worlds do not: sources, sinks, queues, groups, walls other than the room's
+four, and the pymunk contact solver. People walk routes round and round (``layouts``); overlapping bodies are
+pushed apart half the overlap each per tick, out of the robot's disc and into the room.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from crowdsim.crowd import forces
+from crowdsim.crowd.behaviours import AgentTypes
+from crowdsim.robot import arc, limited
+from pipeline.frames import compose
+
+from .layouts import LAYOUTS, Layout, room_walls
+
+ARRIVED = 0.5  # m: a person this near their current route place heads for the next
+
+
+class Worlds:
+    """E worlds of one layout with N persons each: person arrays are [E, N] (positions and velocities by
+    component: array calls on contiguous [E, N] arrays are the cheapest there are), robot arrays [E, ...]."""
+
+    def __init__(self, n_worlds: int, people: int, layout: str, scenario: dict, robot_visible: bool = True):
+        if layout not in LAYOUTS:
+            raise ValueError(f"scenario: expected one of {sorted(LAYOUTS)}, got {layout!r}")
+        if people < 0:
+            raise ValueError(f"people: expected a count >= 0, got {people}")
+        self.E, self.N = n_worlds, people
+        self.layout = LAYOUTS[layout]
+        self.crowd_p = scenario["crowd"]
+        self.robot_p = scenario["robot"]
+        self.robot_radius = self.robot_p["radius"]
+        self.robot_visible = robot_visible
+        self.dt = scenario["dt"]
+        self.types = AgentTypes(self.crowd_p["agent_types"])
+        self.kind = self.types.names.index("adult") if "adult" in self.types.names else 0
+        shape = (n_worlds, people)
+        self.x, self.y, self.vx, self.vy = (np.zeros(shape) for _ in range(4))
+        self.v0 = np.zeros(shape)
+        self.radius = np.full(shape, self.types.radius[self.kind])
+        self.walked = np.zeros(shape)
+        self.route = np.zeros(shape + (1, 2))
+        self.route_length = np.ones(shape, np.int64)
+        self.place = np.zeros(shape, np.int64)  # index of the route place each is heading for
+        self.gx, self.gy = np.zeros(shape), np.zeros(shape)  # the place each is heading for
+        self.robot_pose = np.zeros((n_worlds, 3))
+        self.robot_velocity = np.zeros((n_worlds, 2))
+        self.goal = np.zeros((n_worlds, 2))
+        self.t = np.zeros(n_worlds)
+        self.size = (0.0, 0.0)
+
+    @property
+    def walls(self) -> np.ndarray:
+        return room_walls(self.size)
+
+    @property
+    def position(self) -> np.ndarray:
+        """[E, N, 2]"""
+        return np.stack([self.x, self.y], axis=-1)
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """[E, N, 2]"""
+        return np.stack([self.vx, self.vy], axis=-1)
+
+    def reset(self, k: int, rng: np.random.Generator) -> Layout:
+        """Start world k over from a new layout drawn with ``rng``."""
+        lay = self.layout(self.N, rng)
+        width = lay.route.shape[1]
+        if width != self.route.shape[2]:  # the layout's route width, known once the first is drawn
+            self.route = np.zeros((self.E, self.N, width, 2))
+        self.size = lay.size
+        self.x[k], self.y[k] = lay.start.T
+        self.vx[k], self.vy[k], self.walked[k] = 0.0, 0.0, 0.0
+        v0 = self.types.desired_speeds(np.full(self.N, self.kind), rng)
+        self.v0[k] = v0 if lay.speed is None else np.where(np.isnan(lay.speed), v0, lay.speed)
+        self.route[k], self.route_length[k], self.place[k] = lay.route, lay.route_length, 0
+        self.gx[k], self.gy[k] = lay.route[:, 0].T
+        self.robot_pose[k], self.robot_velocity[k], self.goal[k], self.t[k] = lay.robot_start, 0.0, lay.robot_goal, 0.0
+        return lay
+
+    def tick(self, command: np.ndarray, noise: np.ndarray) -> np.ndarray:
+        """Advance every world one step dt: the persons by their forces (``noise`` [2, E, N] the random force's
+        components), the robots by ``command`` [E, 2] (v, omega) within their limits. Returns each world's smallest
+        gap between the robot's disc and a person's or a wall, before contacts push anyone apart [E] (negative: a
+        collision)."""
+        p, dt = self.crowd_p, self.dt
+        self.robot_velocity = limited(command, self.robot_velocity, self.robot_p, dt)
+        self.robot_pose = compose(self.robot_pose, arc(self.robot_velocity[:, 0], self.robot_velocity[:, 1], dt))
+        self.t += dt
+        gap = self.robot_wall_gap()
+        if self.N == 0:
+            return gap
+        x, y, vx, vy, v0 = self.x, self.y, self.vx, self.vy, self.v0
+        ex, ey = self.gx - x, self.gy - y
+        norm = np.sqrt(ex * ex + ey * ey)
+        np.maximum(norm, 1e-9, out=norm)
+        ex /= norm
+        ey /= norm
+        tau = p["relaxation_time"]
+        ax, ay = (v0 * ex - vx) / tau, (v0 * ey - vy) / tau
+        fx, fy = forces.moussaid2009_dense(x, y, vx, vy, ex, ey, p["moussaid_strength"], p["moussaid_lambda"],
+                                           p["moussaid_gamma"], p["moussaid_n"], p["moussaid_n_prime"], p["fov_deg"],
+                                           p["out_of_view_weight"])
+        ax += fx
+        ay += fy
+        fx, fy = self._wall_force(ex, ey)
+        ax += fx
+        ay += fy
+        rx, ry = self.robot_pose[:, 0:1], self.robot_pose[:, 1:2]
+        if self.robot_visible:
+            fx, fy = self._robot_force(ex, ey, rx, ry)
+            ax += fx
+            ay += fy
+        ax += noise[0]
+        ay += noise[1]
+        nvx, nvy = vx + ax * dt, vy + ay * dt
+        back = np.minimum(nvx * ex + nvy * ey, 0.0)  # pressure stops a walker; it does not walk them backwards
+        nvx -= back * ex
+        nvy -= back * ey
+        cap = np.minimum(1.0, p["max_speed_factor"] * v0 / np.maximum(np.sqrt(nvx * nvx + nvy * nvy), 1e-9))
+        nx, ny = x + nvx * cap * dt, y + nvy * cap * dt
+        ox, oy = nx - rx, ny - ry
+        dist = np.sqrt(ox * ox + oy * oy)
+        gap = np.minimum(gap, (dist - self.radius - self.robot_radius).min(axis=1))
+        nx, ny = self._contacts(nx, ny, rx, ry, ox, oy, dist)
+        self.vx, self.vy = (nx - x) / dt, (ny - y) / dt
+        self.x, self.y = nx, ny
+        self.walked += np.sqrt(self.vx * self.vx + self.vy * self.vy) * dt
+        arrived = (self.gx - nx) ** 2 + (self.gy - ny) ** 2 < ARRIVED ** 2
+        if arrived.any():
+            self.place[arrived] = (self.place[arrived] + 1) % self.route_length[arrived]
+            self.gx[arrived], self.gy[arrived] = self.route[arrived, self.place[arrived]].T
+        return gap
+
+    def _in_view(self, ex, ey, fx, fy) -> np.ndarray:
+        """``forces.in_view_weight`` by component."""
+        p = self.crowd_p
+        seen = -(ex * fx + ey * fy) >= np.sqrt(fx * fx + fy * fy) * np.cos(np.radians(p["fov_deg"]) / 2)
+        return np.where(seen, 1.0, p["out_of_view_weight"])
+
+    def _robot_force(self, ex, ey, rx, ry) -> tuple[np.ndarray, np.ndarray]:
+        """``forces.obstacle_disc_force`` from each world's robot on its persons."""
+        p = self.crowd_p
+        ox, oy = self.x - rx, self.y - ry
+        dist = np.maximum(np.sqrt(ox * ox + oy * oy), 1e-9)
+        mag = p["robot_strength"] / p["robot_range"] * np.exp(
+            -np.maximum(dist - self.robot_radius, 0.0) / p["robot_range"]) / dist
+        fx, fy = mag * ox, mag * oy
+        w = self._in_view(ex, ey, fx, fy)
+        return fx * w, fy * w
+
+    def _wall_force(self, ex, ey) -> tuple[np.ndarray, np.ndarray]:
+        """``forces.wall_force`` from the room's four walls, whose normals are the axes: the gap to each wall is a
+        coordinate, and a wall is in view when the walker faces it within the field of view."""
+        p = self.crowd_p
+        w, h = self.size
+        dist = np.stack([self.x, w - self.x, self.y, h - self.y])  # to the left, right, bottom and top walls
+        facing = np.stack([-ex, ex, -ey, ey]) >= np.cos(np.radians(p["fov_deg"]) / 2)
+        mag = np.exp((self.radius - dist) / p["wall_range"])
+        mag *= np.where(facing, p["wall_strength"], p["wall_strength"] * p["out_of_view_weight"])
+        mag *= dist < p["wall_interaction_range"]
+        return mag[0] - mag[1], mag[2] - mag[3]
+
+    def _contacts(self, x, y, rx, ry, ox, oy, dist) -> tuple[np.ndarray, np.ndarray]:
+        """Overlapping persons apart (half the overlap each), persons out of the robot's disc at (rx, ry) (``ox``,
+        ``oy`` from its centre, at ``dist``), everyone inside the room."""
+        dx, dy = x[:, None, :] - x[:, :, None], y[:, None, :] - y[:, :, None]
+        d = np.sqrt(dx * dx + dy * dy)
+        d += forces._far(self.N)
+        push = self.radius[:, :, None] + self.radius[:, None, :] - d
+        if (push > 0).any():
+            np.maximum(push, 0.0, out=push)
+            push *= 0.5
+            push /= d
+            x = x - (push * dx).sum(axis=2)
+            y = y - (push * dy).sum(axis=2)
+        reach = self.radius + self.robot_radius
+        inside = dist < reach
+        if inside.any():
+            scale = reach[inside] / np.maximum(dist[inside], 1e-9)
+            x[inside] = (rx + ox * 0.0)[inside] + ox[inside] * scale
+            y[inside] = (ry + oy * 0.0)[inside] + oy[inside] * scale
+        w, h = self.size
+        return np.clip(x, self.radius, w - self.radius), np.clip(y, self.radius, h - self.radius)
+
+    def robot_wall_gap(self) -> np.ndarray:
+        """Distance from each robot's disc to the nearest wall of the room [E]."""
+        w, h = self.size
+        x, y = self.robot_pose[:, 0], self.robot_pose[:, 1]
+        return np.minimum(np.minimum(x, w - x), np.minimum(y, h - y)) - self.robot_radius
