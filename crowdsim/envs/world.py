@@ -59,6 +59,7 @@ class Worlds:
         self.goal = np.zeros((n_worlds, 2))
         self.t = np.zeros(n_worlds)
         self.size = (0.0, 0.0)
+        self._wall_gap, self._facing = np.zeros((4,) + shape), np.zeros((4,) + shape)
 
     @property
     def walls(self) -> np.ndarray:
@@ -166,8 +167,14 @@ class Worlds:
         coordinate, and a wall is in view when the walker faces it within the field of view."""
         p = self.crowd_p
         w, h = self.size
-        dist = np.stack([self.x, w - self.x, self.y, h - self.y])  # to the left, right, bottom and top walls
-        facing = np.stack([-ex, ex, -ey, ey]) >= np.cos(np.radians(p["fov_deg"]) / 2)
+        dist, facing = self._wall_gap, self._facing  # to the left, right, bottom and top walls
+        dist[0], dist[2] = self.x, self.y
+        np.subtract(w, self.x, out=dist[1])
+        np.subtract(h, self.y, out=dist[3])
+        facing[0], facing[2] = ex, ey
+        np.negative(facing[0], out=facing[1])
+        np.negative(facing[2], out=facing[3])
+        facing = facing <= -np.cos(np.radians(p["fov_deg"]) / 2)  # the force (away from the wall) against e
         mag = np.exp((self.radius - dist) / p["wall_range"])
         mag *= np.where(facing, p["wall_strength"], p["wall_strength"] * p["out_of_view_weight"])
         mag *= dist < p["wall_interaction_range"]
@@ -193,7 +200,8 @@ class Worlds:
             x[inside] = (rx + ox * 0.0)[inside] + ox[inside] * scale
             y[inside] = (ry + oy * 0.0)[inside] + oy[inside] * scale
         w, h = self.size
-        return np.clip(x, self.radius, w - self.radius), np.clip(y, self.radius, h - self.radius)
+        r = self.radius
+        return np.minimum(np.maximum(x, r), w - r), np.minimum(np.maximum(y, r), h - r)
 
     def robot_wall_gap(self) -> np.ndarray:
         """Distance from each robot's disc to the nearest wall of the room [E]."""

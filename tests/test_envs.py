@@ -1,0 +1,241 @@
+"""The gymnasium environments: the checker, determinism, the vector environments against the single one, the
+observations' geometry, the reward terms and the episode ends."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from gymnasium.vector import AutoresetMode
+
+import crowdsim  # noqa: F401  (registers the ids)
+from crowdsim.envs.core import Config, Episodes
+from crowdsim.envs.layouts import LAYOUTS, room_walls
+from crowdsim.envs.navigate import CrowdEnv
+
+MODES = ["truth", "laser", "tracks", ("truth", "laser", "tracks")]
+
+
+@pytest.mark.parametrize("env_id", ["crowdsim/Navigate-v0", "crowdsim/Follow-v0"])
+@pytest.mark.parametrize("mode", MODES)
+def test_gymnasium_checker_passes(env_id, mode):
+    env = gym.make(env_id, observation=mode, people=6, render_mode="rgb_array")
+    check_env(env.unwrapped)
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
+
+
+def _rollout(env, seed, steps, actions):
+    obs, _ = env.reset(seed=seed)
+    out = [obs]
+    rewards = []
+    for t in range(steps):
+        obs, reward, terminated, truncated, _ = env.step(actions[t])
+        out.append(obs)
+        rewards.append(reward)
+        if terminated or truncated:
+            obs, _ = env.reset()
+            out.append(obs)
+    return out, rewards
+
+
+@pytest.mark.parametrize("mode", ["truth", ("laser", "tracks")])
+def test_one_seed_gives_identical_observations_and_rewards_twice(mode):
+    actions = np.random.default_rng(5).uniform(-1, 1, (200, 2))
+    runs = [_rollout(gym.make("crowdsim/Navigate-v0", observation=mode, people=10), 7, 200, actions)
+            for _ in range(2)]
+    (obs_a, rew_a), (obs_b, rew_b) = runs
+    assert rew_a == rew_b
+    assert len(obs_a) == len(obs_b)
+    for a, b in zip(obs_a, obs_b):
+        for key in a:
+            assert np.array_equal(a[key], b[key]), key
+
+
+def test_another_seed_gives_another_crowd():
+    env = gym.make("crowdsim/Navigate-v0")
+    a, _ = env.reset(seed=1)
+    b, _ = env.reset(seed=2)
+    assert not np.array_equal(a["persons"], b["persons"])
+
+
+@pytest.mark.parametrize("mode", ["truth", ("truth", "tracks")])
+def test_native_vector_env_episodes_equal_the_single_envs(mode):
+    """Sub-environment i of the vector env reset with seed s is the single env reset with seed s + i, through
+    episode ends (next-step autoreset)."""
+    n, steps, seed = 3, 60, 11
+    actions = np.random.default_rng(2).uniform(-1, 1, (steps, n, 2))
+    vec = gym.make_vec("crowdsim/Navigate-v0", num_envs=n, vectorization_mode="vector_entry_point",
+                       observation=mode, people=8, time_limit=4.0)
+    obs, _ = vec.reset(seed=seed)
+    vec_obs, vec_rewards, vec_done = [obs], [], []
+    for t in range(steps):
+        obs, reward, terminated, truncated, _ = vec.step(actions[t])
+        vec_obs.append(obs)
+        vec_rewards.append(reward)
+        vec_done.append(terminated | truncated)
+    assert np.any(vec_done), "the time limit must end episodes within the test"
+    for i in range(n):
+        env = gym.make("crowdsim/Navigate-v0", observation=mode, people=8, time_limit=4.0)
+        obs, _ = env.reset(seed=seed + i)
+        expected, rewards, restart = [obs], [], False
+        for t in range(steps):
+            if restart:  # next-step autoreset: this step resets, its action is ignored
+                obs, _ = env.reset()
+                reward, restart = 0.0, False
+            else:
+                obs, reward, terminated, truncated, _ = env.step(actions[t, i])
+                restart = terminated or truncated
+            expected.append(obs)
+            rewards.append(reward)
+        for t, single in enumerate(expected):
+            for key in single:
+                assert np.array_equal(vec_obs[t][key][i], single[key]), (i, t, key)
+        assert np.array_equal([r[i] for r in vec_rewards], rewards)
+
+
+def test_same_step_autoreset_returns_the_final_observation_and_a_fresh_start():
+    vec = gym.make_vec("crowdsim/Navigate-v0", num_envs=2, vectorization_mode="vector_entry_point", people=4,
+                       time_limit=0.4, autoreset_mode=AutoresetMode.SAME_STEP)
+    vec.reset(seed=0)
+    vec.step(np.zeros((2, 2)))
+    obs, _, _, truncated, info = vec.step(np.zeros((2, 2)))
+    assert truncated.all() and info["_final_obs"].all()
+    single = CrowdEnv(people=4, time_limit=0.4)
+    single.reset(seed=0)
+    single.step(np.zeros(2))
+    final, *_ = single.step(np.zeros(2))
+    fresh, _ = single.reset()
+    assert np.array_equal(info["final_obs"][0]["persons"], final["persons"])
+    assert np.array_equal(obs["persons"][0], fresh["persons"])
+    assert info["final_info"]["episode_metrics"][0]["timeout"]
+
+
+def test_async_vector_env_runs():
+    vec = gym.make_vec("crowdsim/Navigate-v0", num_envs=4, vectorization_mode="async", people=5)
+    try:
+        obs, _ = vec.reset(seed=3)
+        for _ in range(3):
+            obs, reward, *_ = vec.step(vec.action_space.sample())
+        assert obs["persons"].shape == (4, 10, 5) and reward.shape == (4,)
+    finally:
+        vec.close()
+
+
+def test_disabled_autoreset_resets_only_the_masked_envs():
+    vec = CrowdEnvVector = gym.make_vec("crowdsim/Navigate-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                                        people=4, autoreset_mode=AutoresetMode.DISABLED)
+    first, _ = CrowdEnvVector.reset(seed=4)
+    vec.step(np.ones((2, 2)))
+    obs, _ = vec.reset(options={"reset_mask": np.array([False, True])})
+    assert not np.array_equal(obs["persons"][0], first["persons"][0])  # env 0 carried on
+    assert not np.array_equal(obs["persons"][1], first["persons"][1])  # env 1 started a new episode (own generator)
+
+
+def test_truth_observation_is_in_the_robot_frame_nearest_first():
+    env = CrowdEnv(people=5, k_nearest=7)
+    env.reset(seed=0)
+    w = env.episodes.worlds
+    w.robot_pose[0] = [6.0, 4.0, np.pi / 2]  # facing +y
+    w.x[0] = [6.0, 3.0, 9.0, 6.0, 11.0]
+    w.y[0] = [6.0, 4.0, 4.0, 1.0, 7.0]
+    w.vx[0], w.vy[0] = 0.0, 0.0
+    w.vy[0, 0] = 1.0  # walking +y: straight ahead of the robot, away from it
+    obs = env.episodes.observe()
+    persons, mask = obs["persons"][0], obs["persons_mask"][0]
+    # forward is +y, left is -x: (6, 6) is 2 m ahead, (3, 4) 3 m to the left, (9, 4) 3 m to the right
+    assert persons[0, :4] == pytest.approx([2.0, 0.0, 1.0, 0.0])
+    assert sorted(map(tuple, persons[1:3, :2].round(6))) == [(0.0, -3.0), (0.0, 3.0)]
+    assert persons[3, :2] == pytest.approx([-3.0, 0.0])
+    assert persons[4, :2] == pytest.approx([3.0, -5.0])
+    assert mask.tolist() == [1, 1, 1, 1, 1, 0, 0]
+    assert persons[5:].sum() == 0
+    w.goal[0] = [6.0, 8.0]
+    assert env.episodes.observe()["goal"][0] == pytest.approx([4.0, 0.0])
+
+
+def test_collision_terminates_with_the_collision_term():
+    env = CrowdEnv(people=1, reward="crowdnav")
+    env.reset(seed=0)
+    w = env.episodes.worlds
+    w.robot_pose[0] = [5.0, 4.0, 0.0]
+    w.x[0], w.y[0], w.vx[0], w.vy[0] = 5.6, 4.0, 0.0, 0.0  # 0.6 m apart: 0.425 + 0.25 overlap
+    w.gx[0], w.gy[0] = 5.6, 4.0  # standing at their goal
+    _, reward, terminated, truncated, info = env.step(np.zeros(2))
+    assert terminated and not truncated and info["collision"]
+    assert reward == pytest.approx(-0.25)  # CrowdNav: collision alone, no discomfort on top
+    assert info["episode_metrics"]["collision"]
+
+
+def test_reaching_the_goal_terminates_with_success():
+    env = CrowdEnv(people=0, reward="crowdnav")
+    env.reset(seed=0)
+    w = env.episodes.worlds
+    w.goal[0] = w.robot_pose[0, :2] + [0.1, 0.0]
+    env.episodes.distance[0] = 0.1
+    _, reward, terminated, _, info = env.step(np.zeros(2))
+    assert terminated and info["success"] and reward == pytest.approx(1.0)
+
+
+def test_discomfort_is_crowdnavs_below_two_decimetres():
+    env = CrowdEnv(people=1, reward="crowdnav")
+    env.reset(seed=0)
+    w = env.episodes.worlds
+    w.robot_pose[0] = [5.0, 4.0, 0.0]
+    w.crowd_p = {**w.crowd_p, "random_force": 0.0, "robot_strength": 0.0}
+    env.episodes.noise_rng[0] = np.random.default_rng(0)
+    w.x[0], w.y[0], w.vx[0], w.vy[0] = 5.0, 4.775, 0.0, 0.0  # gap 0.1 m straight above the standing robot
+    w.v0[0] = 0.0
+    _, reward, terminated, _, info = env.step(np.zeros(2))
+    assert not terminated
+    gap = info["reward_terms"]["discomfort"] / 0.2 + 0.2  # (gap - 0.2) x 0.2 s
+    assert gap == pytest.approx(0.1, abs=0.01)
+    assert reward == pytest.approx(0.5 * (gap - 0.2) * 0.2)
+
+
+def test_time_limit_truncates():
+    env = CrowdEnv(people=2, time_limit=1.0)
+    env.reset(seed=0)
+    ends = [env.step(np.zeros(2))[3] for _ in range(5)]
+    assert ends == [False] * 4 + [True]
+
+
+def test_robot_visibility_changes_how_people_react():
+    """People keep clear of a visible robot; an invisible one (CrowdNav's published setting) is walked into."""
+    closest = {}
+    for visible in (True, False):
+        ep = Episodes(1, Config(people=1, robot_visible=visible))
+        ep.reset(0, np.random.default_rng(0))
+        w = ep.worlds
+        w.crowd_p = {**w.crowd_p, "random_force": 0.0}
+        w.robot_pose[0] = [6.0, 4.0, 0.0]
+        w.x[0], w.y[0], w.gx[0], w.gy[0], w.v0[0] = 3.0, 4.3, 11.0, 4.3, 1.2  # passing 0.3 m off the robot's centre
+        closest[visible] = min(w.tick(np.zeros((1, 2)), np.zeros((2, 1, 1)))[0] for _ in range(150))
+    assert closest[False] < 0.0  # walked into: contacts push them out again each tick
+    assert closest[True] > 0.0
+
+
+@pytest.mark.parametrize("name", sorted(LAYOUTS))
+def test_layouts_start_everyone_apart_inside_the_room_and_clear_of_the_robot(name):
+    for seed in range(5):
+        lay = LAYOUTS[name](12, np.random.default_rng(seed))
+        d = np.linalg.norm(lay.start[:, None] - lay.start[None], axis=2) + np.eye(12) * 9
+        assert d.min() > 0.5  # two radii
+        assert (np.linalg.norm(lay.start - lay.robot_start[:2], axis=1) > 1.0).all()
+        w, h = lay.size
+        assert ((lay.start > 0.25) & (lay.start < [w - 0.25, h - 0.25])).all()
+        assert len(room_walls(lay.size)) == 4
+
+
+def test_too_many_people_is_one_clear_error():
+    with pytest.raises(ValueError, match="people: layout 'passers_by' has room for at most"):
+        CrowdEnv(people=500).reset(seed=0)
+
+
+def test_options_change_the_scenario_and_the_people():
+    env = CrowdEnv(people=3)
+    obs, _ = env.reset(seed=0, options={"scenario": "circle_crossing", "people": 6})
+    assert obs["persons_mask"].sum() == 6
+    assert env.episodes.worlds.size == (14.0, 14.0)
+    with pytest.raises(ValueError, match="options: unknown key"):
+        env.reset(options={"humans": 3})
