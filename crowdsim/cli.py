@@ -163,6 +163,10 @@ def _cmd_bench(args) -> int:
         from .bench.eval import run_eval_benchmark
 
         run_eval_benchmark(json_path=args.json, quick=args.quick)
+    elif args.what == "env":
+        from .bench.env import run_env_benchmark
+
+        run_env_benchmark(json_path=args.json, quick=args.quick)
     elif args.what == "sensors":
         from .bench.sensors import run_sensor_benchmarks
 
@@ -225,12 +229,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_scenario_keys)
     p = sub.add_parser("bench", help="measure the crowd, the lasers, the tracker and the whole loop; "
                                      "`bench sim`: the crowd against JuPedSim; `bench sensors`: every sensor; "
-                                     "`bench eval`: the evaluation")
-    p.add_argument("what", nargs="?", choices=("loop", "sim", "sensors", "eval"), default="loop",
+                                     "`bench eval`: the evaluation; `bench env`: the gym environments")
+    p.add_argument("what", nargs="?", choices=("loop", "sim", "sensors", "eval", "env"), default="loop",
                    help="loop (default): every part and the airport loop; sim: the crowd simulator at 100, 1000 "
                         "and 5000 agents side by side with JuPedSim's social force model; sensors: each sensor's "
                         "cost with 100 and 500 people, batched rays, and the robot's sensor mix against real time; "
-                        "eval: the evaluation's frames/s on 5000 frames of 80 persons")
+                        "eval: the evaluation's frames/s on 5000 frames of 80 persons; env: environment steps/s, "
+                        "one env and the vector envs")
     p.add_argument("--json", help="also write the figures to this JSON file")
     p.add_argument("--quick", action="store_true", help="shorter measurements (for a smoke test)")
     p.set_defaults(func=_cmd_bench)

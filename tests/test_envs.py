@@ -239,3 +239,18 @@ def test_options_change_the_scenario_and_the_people():
     assert env.episodes.worlds.size == (14.0, 14.0)
     with pytest.raises(ValueError, match="options: unknown key"):
         env.reset(options={"humans": 3})
+
+
+def test_rerun_recording_and_flattened_observations(tmp_path):
+    from gymnasium.wrappers import FlattenObservation
+
+    path = tmp_path / "env.rrd"
+    env = FlattenObservation(gym.make("crowdsim/Navigate-v0", observation=("truth", "tracks"), people=4,
+                                      record=str(path)))
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == env.observation_space.shape == (2 + 2 + 10 * 5 + 10 + 10 * 8 + 10,)
+    for _ in range(3):
+        obs, *_ = env.step(env.action_space.sample())
+        assert env.observation_space.contains(obs)
+    env.close()
+    assert path.stat().st_size > 1000

@@ -4,6 +4,9 @@
 (gymnasium's ``vector_entry_point``, with the three autoreset modes gymnasium defines). Sub-environment i of a
 vector environment reset with seed s is the single environment reset with seed s + i, step for step.
 
+``render_mode="rgb_array"`` draws the episode from above (``render``); ``record="file.rrd"`` (single environment)
+writes a rerun recording of every step.
+
 Actions: (v, omega) in [-1, 1]^2, scaled to the robot's speed limits (its acceleration limits then apply).
 An episode ends ``terminated`` on reaching the goal or touching a person or a wall, ``truncated`` at the time limit;
 the last step's info holds ``episode_metrics``.
@@ -19,6 +22,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from .core import Config, Episodes
+from .record import EnvRecording
 from .render import top_down
 
 ACTION_SPACE = spaces.Box(-1.0, 1.0, (2,), np.float32)
@@ -34,11 +38,13 @@ class CrowdEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 5}
 
-    def __init__(self, task: str = "navigate", render_mode: str | None = None, **kwargs):
+    def __init__(self, task: str = "navigate", render_mode: str | None = None, record: str | None = None,
+                 **kwargs):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
         self.episodes = Episodes(1, _config(task, kwargs))
+        self.recording = EnvRecording(record) if record else None
         self.observation_space = self.episodes.observer.space
         self.action_space = ACTION_SPACE
         self.metadata = {**self.metadata, "render_fps": 1.0 / self.episodes.config.control_period}
@@ -47,16 +53,24 @@ class CrowdEnv(gym.Env):
         super().reset(seed=seed)
         self.episodes.apply_options(options)
         self.episodes.reset(0, self.np_random)
+        if self.recording:
+            self.recording.reset(self.episodes)
         return _row(self.episodes.observe(), 0), {}
 
     def step(self, action):
         rewards, terminated, truncated, infos = self.episodes.step(np.asarray(action, float)[None])
+        if self.recording:
+            self.recording.log(self.episodes)
         return _row(self.episodes.observe(), 0), float(rewards[0]), bool(terminated[0]), bool(truncated[0]), infos[0]
 
     def render(self):
         if self.render_mode == "rgb_array":
             return top_down(self.episodes, 0)
         return None
+
+    def close(self):
+        if self.recording:
+            self.recording.close()
 
 
 class CrowdVectorEnv(VectorEnv):

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.frames import compose, transform_points
+from pipeline.frames import transform_points
 
 PIXELS_PER_M = 25
 FLOOR, WALL, PERSON, TARGET, ROBOT, GOAL, TRACK = (np.array(c, np.uint8) for c in (
@@ -38,7 +38,7 @@ def top_down(episodes, k: int) -> np.ndarray:
         disc(pose[0] + s * np.cos(pose[2]), pose[1] + s * np.sin(pose[2]), 0.05, FLOOR)
     tracks = episodes.tracks[k]
     if tracks is not None and len(tracks):
-        world = transform_points(compose(episodes.start[k], np.zeros(3)), tracks.position)  # odom -> world
+        world = transform_points(episodes.start[k], tracks.position)  # odom -> world (exact odometry)
         for x, y in world:
             disc(x, y, 0.3, TRACK, ring=True)
     return image
