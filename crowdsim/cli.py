@@ -1,4 +1,5 @@
-"""The ``crowdsim`` command: run, evaluate, scenarios, validate-scenario, validate, scenario-keys, bench."""
+"""The ``crowdsim`` command: run, evaluate, evaluate-nav, report, scenarios, validate-scenario, validate,
+scenario-keys, bench."""
 
 from __future__ import annotations
 
@@ -82,6 +83,13 @@ def _cmd_evaluate(args) -> int:
         first = pair.first_frame or 0
         write_motchallenge(out / "gt.txt", pair.gt_chunks(), groundtruth=True, first_frame=first)
         write_motchallenge(out / "tracks.txt", pair.track_chunks(), groundtruth=False, first_frame=first)
+    return 0
+
+
+def _cmd_evaluate_nav(args) -> int:
+    from evaluation.navigation_report import evaluate_nav_main
+
+    print(evaluate_nav_main([Path(d) for d in args.run_dirs], Path(args.json) if args.json else None))
     return 0
 
 
@@ -212,6 +220,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--motchallenge", help="also export gt.txt and tracks.txt, MOTChallenge-style, into this new or "
                                           "empty directory")
     p.set_defaults(func=_cmd_evaluate)
+    p = sub.add_parser("evaluate-nav", help="navigation metrics (outcome, path, smoothness, social, passers-by, "
+                                            "following) of run directories from their logged trajectories")
+    p.add_argument("run_dirs", nargs="+", metavar="RUN_DIR",
+                   help="directories with robot.csv, persons.csv, navigation.json (and following.csv for a "
+                        "following task): layouts in docs/navigation-metrics.md")
+    p.add_argument("--json", help="also write {\"runs\": [...], \"mean\": ..., \"sd\": ...} to this new file")
+    p.set_defaults(func=_cmd_evaluate_nav)
     p = sub.add_parser("report", help="report.md with the metric tables and figures of a run directory")
     p.add_argument("run_dir", help="a directory `crowdsim run` wrote")
     p.add_argument("--out", help="where to write it (default RUN_DIR/report); must be new or empty")
