@@ -186,6 +186,27 @@ def _cmd_bench(args) -> int:
     return 0
 
 
+def _cmd_experiment(args) -> int:
+    from .outdir import check_out_dir, write_directory
+
+    if args.minutes <= 0:
+        raise ValueError(f"--minutes: expected a time above 0, got {args.minutes}")
+    out = Path(args.out) if args.out else Path("runs") / f"ppo-{time.strftime('%Y%m%d-%H%M%S')}"
+    check_out_dir(out)
+    from .experiments.ppo import run_ppo
+
+    r = write_directory(out, lambda tmp: run_ppo(tmp, args.minutes, envs=args.envs, people=args.people,
+                                                 seed=args.seed, eval_episodes=args.eval_episodes))
+    print(f"PPO: {r['steps']:,} steps in {r['train_wall_s'] / 60:.1f} min ({r['steps_per_s']:.0f}/s), "
+          f"{r['training_episodes']} training episodes")
+    for name in ("ppo", "random"):
+        e = r[name]
+        print(f"{name:7s} on {e['episodes']} evaluation seeds: success {e['success_rate']:.0%}, collision "
+              f"{e['collision_rate']:.0%}, timeout {e['timeout_rate']:.0%}, mean return {e['mean_return']:.2f}")
+    print(f"learning curve: {out / 'learning_curve.png'}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="crowdsim", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -254,6 +275,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", help="also write the figures to this JSON file")
     p.add_argument("--quick", action="store_true", help="shorter measurements (for a smoke test)")
     p.set_defaults(func=_cmd_bench)
+    p = sub.add_parser("experiment", help="experiments that take long: `experiment ppo` trains PPO on Navigate-v0")
+    p.add_argument("what", choices=("ppo",), help="ppo: stable-baselines3 PPO on crowdsim/Navigate-v0 with the "
+                                                  "tracks observation, against the random policy (needs [rl])")
+    p.add_argument("--minutes", type=float, default=30.0, help="wall-clock training budget (default 30)")
+    p.add_argument("--envs", type=int, default=8, help="environments stepped together (default 8)")
+    p.add_argument("--people", type=int, default=10, help="people per environment (default 10)")
+    p.add_argument("--seed", type=int, default=0, help="training seed (evaluation seeds are disjoint)")
+    p.add_argument("--eval-episodes", type=int, default=100, help="evaluation episodes per policy (default 100)")
+    p.add_argument("--out", help="output directory (default runs/ppo-<time>); must be new or empty")
+    p.set_defaults(func=_cmd_experiment)
     return parser
 
 

@@ -13,16 +13,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from evaluation.navigation import NavEpisode, PersonRows, navigation_metrics
 from pipeline.assemble import build_pipeline
 from pipeline.frames import compose, inverse, transform_points
 from pipeline.fusion import to_frame
 from scenarios import scenario_from_dict
 from sensors import Laser, Scene, parts_at
 from sensors.body import body_scale
+from sensors.tag import TagSensor
 
 from .layouts import LAYOUTS
 from .observe import Observer
-from .reward import Reward
+from .reward import BAND, Reward
 from .world import Worlds
 
 TASKS = ("navigate", "follow")
@@ -101,8 +103,9 @@ class Episodes:
         self.start = np.zeros((self.n, 3))
         self.elapsed = np.zeros(self.n)
         self.distance = np.zeros(self.n)
-        self.min_gap = np.full(self.n, np.inf)
         self.log: list[list] = [[] for _ in range(self.n)]
+        self.tags: list[TagSensor | None] = [None] * self.n
+        self.tag_readings = [None] * self.n
 
     def apply_options(self, options: dict | None) -> None:
         """``scenario``, ``people`` and ``robot_visible`` from a reset's options: the worlds are made anew."""
@@ -119,17 +122,19 @@ class Episodes:
     def reset(self, k: int, generator: np.random.Generator) -> None:
         """Start episode k over with ``generator`` (the environment's ``np_random``)."""
         self.generators[k] = generator
-        layout_rng, noise_rng, laser_rng = generator.spawn(3)
+        layout_rng, noise_rng, laser_rng, tag_rng = generator.spawn(4)
         self.noise_rng[k] = noise_rng
         self.worlds.reset(k, layout_rng)
+        if self.config.task == "follow":
+            self.tags[k] = TagSensor({}, tag_rng)
+            self._read_tag(k)
         self.start[k] = self.worlds.robot_pose[k]
         self.elapsed[k] = 0.0
-        self.min_gap[k] = np.inf
         self.distance[k] = self._goal_distance(k)
         if self.sensing:
             self._reset_sensing(k, laser_rng)
         self.log[k] = []
-        self._log(k)
+        self._log(k, None)
 
     def _reset_sensing(self, k: int, rng: np.random.Generator) -> None:
         laser_p = self.scenario["sensors"]["lasers"][0]
@@ -143,6 +148,12 @@ class Episodes:
         self.lasers[k] = Laser(laser_p, self.scenes[k], rng)
         self.pipelines[k].reset()
         self._sense(k)
+
+    def _read_tag(self, k: int) -> None:
+        """The tag sensor's reading of the target (person 0) at this step, or None."""
+        w = self.worlds
+        reading = self.tags[k].read(float(w.t[k]), w.robot_pose[k], np.array([w.x[k, 0], w.y[k, 0]]))
+        self.tag_readings[k] = reading
 
     def _goal_distance(self, k: int) -> float:
         w = self.worlds
@@ -174,13 +185,18 @@ class Episodes:
         command = a * np.array([p["max_speed"], p["max_angular_speed"]])
         noise = np.stack([g.normal(0.0, w.crowd_p["random_force"], (self.ticks, 2, w.N)) for g in self.noise_rng], 2)
         gap = np.full(self.n, np.inf)
+        at_collision = {}  # episode -> its state at the tick of its first collision, for the log
         for t in range(self.ticks):
-            gap = np.minimum(gap, w.tick(command, noise[t]))
+            tick_gap = w.tick(command, noise[t])
+            for k in np.flatnonzero((tick_gap < 0) & (gap >= 0)):
+                at_collision[k] = self._state(k)
+            gap = np.minimum(gap, tick_gap)
         self.elapsed += self.ticks * w.dt
-        self.min_gap = np.minimum(self.min_gap, gap)
-        if self.sensing:
-            for k in range(self.n):
+        for k in range(self.n):
+            if self.sensing:
                 self._sense(k)
+            if self.config.task == "follow":
+                self._read_tag(k)
         before = self.distance.copy()
         self.distance = np.hypot(*(w.goal - w.robot_pose[:, :2]).T)
         collided = gap < 0
@@ -190,26 +206,56 @@ class Episodes:
         rewards, terms = self.reward(self, before, gap, reached, collided)
         infos = []
         for k in range(self.n):
-            self._log(k)
+            self._log(k, at_collision.get(k))
             info = {"reward_terms": {name: float(v[k]) for name, v in terms.items()}, "collision": bool(collided[k]),
                     "success": bool(reached[k]), "time": float(self.elapsed[k])}
             if terminated[k] or truncated[k]:
-                info["episode_metrics"] = self.episode_summary(k, bool(reached[k]), bool(collided[k]))
+                info["episode_metrics"] = self.episode_metrics(k)
             infos.append(info)
         return rewards, terminated, truncated, infos
 
-    def _log(self, k: int) -> None:
+    def _state(self, k: int) -> tuple:
         w = self.worlds
-        self.log[k].append((float(self.elapsed[k]), w.robot_pose[k].copy(), w.position[k].copy(),
-                            w.velocity[k].copy()))
+        return float(w.t[k]), w.robot_pose[k].copy(), w.position[k].copy(), w.velocity[k].copy()
 
-    def episode_summary(self, k: int, success: bool, collided: bool) -> dict:
-        """The episode's outcome and the robot's path (the navigation metrics come with the evaluation's module)."""
-        poses = np.array([entry[1] for entry in self.log[k]])
-        return {"success": success, "collision": collided, "timeout": not (success or collided),
-                "time": float(self.elapsed[k]), "path_length": float(np.linalg.norm(np.diff(poses[:, :2], axis=0),
-                                                                                    axis=1).sum()),
-                "min_gap": float(self.min_gap[k])}
+    def _log(self, k: int, state: tuple | None) -> None:
+        """One entry per step: the state at its end, or at the tick of a collision within it; for following, the
+        target's track (the pipeline's track nearest the target, within the evaluation's threshold; the target's
+        own id when the truth is observed) and whether the laser saw the target."""
+        entry = state or self._state(k)
+        if self.config.task == "follow":
+            entry += self._target_seen(k)
+        self.log[k].append(entry)
+
+    def _target_seen(self, k: int) -> tuple[int, bool]:
+        if not self.sensing:
+            return 1, True
+        visible = bool((self.scans[k].person_id == 1).any())
+        tracks = self.tracks[k]
+        if tracks is None or len(tracks) == 0:
+            return -1, visible
+        w = self.worlds
+        target = transform_points(inverse(self.start[k]), np.array([[w.x[k, 0], w.y[k, 0]]]))[0]
+        d = np.hypot(*(tracks.position - target).T)
+        best = int(np.argmin(d))
+        threshold = self.scenario["evaluation"]["threshold"]
+        return (int(tracks.track_id[best]) if d[best] <= threshold else -1), visible
+
+    def episode_metrics(self, k: int) -> dict:
+        """The navigation metrics of episode k's log (``evaluation.navigation``)."""
+        log, w = self.log[k], self.worlds
+        T, N = len(log), w.N
+        persons = PersonRows(np.repeat(np.arange(T), N), np.tile(np.arange(1, N + 1), T),
+                             np.concatenate([e[2] for e in log]).reshape(-1, 2),
+                             np.concatenate([e[3] for e in log]).reshape(-1, 2), np.tile(w.radius[k], T))
+        common = dict(stamp=np.array([e[0] for e in log]), robot_pose=np.array([e[1] for e in log]),
+                      robot_radius=w.robot_radius, persons=persons, walls=w.walls, time_limit=self.config.time_limit)
+        if self.config.task == "follow":
+            episode = NavEpisode(task="follow", target_id=1, band=BAND, target_track=np.array([e[4] for e in log]),
+                                 target_visible=np.array([e[5] for e in log]), **common)
+        else:
+            episode = NavEpisode(task="goal", goal=w.goal[k].copy(), goal_radius=GOAL_RADIUS, **common)
+        return navigation_metrics(episode)
 
     def observe(self) -> dict[str, np.ndarray]:
         return self.observer(self)

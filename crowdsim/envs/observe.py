@@ -1,10 +1,12 @@
 """What a policy observes, in the robot's frame (x forward, y left), as a ``Dict`` of float32 boxes.
 
-Always: ``goal`` (the goal's position; for following, the point the robot would go to with no target) and
-``velocity`` (the robot's executed v, omega). Then the modes chosen at ``make``:
+Always ``velocity`` (the robot's executed v, omega), and for navigation ``goal`` (the goal's position), for
+following ``tag`` (the tag sensor's reading of the target at this step: range in m, bearing in rad, and 1; zeros
+when it read nothing: out of its 0.5-4.5 m coverage, or missed). Then the modes chosen at ``make``:
 
 * ``truth``: the K nearest persons' exact positions, velocities and radii (``persons`` [K, 5]) and which rows hold
-  someone (``persons_mask`` [K]): what CrowdNav's policies see;
+  someone (``persons_mask`` [K]): what CrowdNav's policies see; following adds the target's (``target`` [4]: x, y,
+  vx, vy);
 * ``laser``: the scan's ranges (``laser`` [beams]; no return reads the range limit);
 * ``tracks``: the pipeline's K nearest tracks (``tracks`` [K, 8]: x, y, vx, vy, var_x, var_y, cov_xy, matched) and
   ``tracks_mask``: what the robot's own software believes, with its misses, false positives and id switches.
@@ -21,6 +23,7 @@ from gymnasium import spaces
 
 from pipeline.frames import inverse, transform_points
 from pipeline.types import UNKNOWN_VARIANCE
+from sensors.tag import TAG_DEFAULTS
 
 MAX_SPEED = 5.0  # m/s: observed person and track speeds are clipped to this per axis (people walk below 2.6)
 ROOM_DIAGONAL = float(np.hypot(14.0, 14.0))  # m, the largest room of ``layouts``
@@ -37,12 +40,18 @@ class Observer:
         robot, laser = scenario["robot"], scenario["sensors"]["lasers"][0]
         K, D = config.k_nearest, ROOM_DIAGONAL
         self.range_max = laser["range_max"]
-        parts = {"goal": _box(-D, D, (2,)),
-                 "velocity": _box([-robot["max_speed"], -robot["max_angular_speed"]],
+        self.follow = config.task == "follow"
+        parts = {"velocity": _box([-robot["max_speed"], -robot["max_angular_speed"]],
                                   [robot["max_speed"], robot["max_angular_speed"]], (2,))}
+        if self.follow:
+            parts["tag"] = _box([0.0, -np.pi, 0.0], [TAG_DEFAULTS["range_max"], np.pi, 1.0], (3,))
+        else:
+            parts["goal"] = _box(-D, D, (2,))
         if "truth" in config.observation:
             parts["persons"] = _box([-D, -D, -MAX_SPEED, -MAX_SPEED, 0.0], [D, D, MAX_SPEED, MAX_SPEED, 1.0], (K, 5))
             parts["persons_mask"] = _box(0.0, 1.0, (K,))
+            if self.follow:
+                parts["target"] = _box([-D, -D, -MAX_SPEED, -MAX_SPEED], [D, D, MAX_SPEED, MAX_SPEED], (4,))
         if "laser" in config.observation:
             n = int(round(laser["fov_deg"] / laser["resolution_deg"])) + (0 if laser["fov_deg"] >= 360 else 1)
             parts["laser"] = _box(0.0, self.range_max, (n,))
@@ -58,16 +67,21 @@ class Observer:
         w, K = episodes.worlds, self.config.k_nearest
         pose = w.robot_pose
         c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
-        out = {}
-        gx, gy = w.goal[:, 0] - pose[:, 0], w.goal[:, 1] - pose[:, 1]
-        out["goal"] = np.stack([c * gx + s * gy, -s * gx + c * gy], 1)
-        out["velocity"] = w.robot_velocity.copy()
+        out = {"velocity": w.robot_velocity.copy()}
+        if self.follow:
+            out["tag"] = np.array([[0.0, 0.0, 0.0] if r is None else [r.range, r.bearing, 1.0]
+                                   for r in episodes.tag_readings])
+        else:
+            gx, gy = w.goal[:, 0] - pose[:, 0], w.goal[:, 1] - pose[:, 1]
+            out["goal"] = np.stack([c * gx + s * gy, -s * gx + c * gy], 1)
         if "truth" in self.config.observation:
             dx, dy = w.x - pose[:, 0:1], w.y - pose[:, 1:2]
             rows = np.stack([c[:, None] * dx + s[:, None] * dy, -s[:, None] * dx + c[:, None] * dy,
                              c[:, None] * w.vx + s[:, None] * w.vy, -s[:, None] * w.vx + c[:, None] * w.vy,
                              w.radius], axis=-1)
             out["persons"], out["persons_mask"] = _nearest(rows, dx * dx + dy * dy, K)
+            if self.follow:
+                out["target"] = rows[:, 0, :4]
         if "laser" in self.config.observation:
             ranges = np.stack([scan.ranges for scan in episodes.scans])
             out["laser"] = np.where(np.isfinite(ranges), ranges, self.range_max)

@@ -135,7 +135,7 @@ class Worlds:
         ox, oy = nx - rx, ny - ry
         dist = np.sqrt(ox * ox + oy * oy)
         gap = np.minimum(gap, (dist - self.radius - self.robot_radius).min(axis=1))
-        nx, ny = self._contacts(nx, ny, rx, ry, ox, oy, dist)
+        nx, ny = self._contacts(nx, ny)
         self.vx, self.vy = (nx - x) / dt, (ny - y) / dt
         self.x, self.y = nx, ny
         self.walked += np.sqrt(self.vx * self.vx + self.vy * self.vy) * dt
@@ -180,9 +180,10 @@ class Worlds:
         mag *= dist < p["wall_interaction_range"]
         return mag[0] - mag[1], mag[2] - mag[3]
 
-    def _contacts(self, x, y, rx, ry, ox, oy, dist) -> tuple[np.ndarray, np.ndarray]:
-        """Overlapping persons apart (half the overlap each), persons out of the robot's disc at (rx, ry) (``ox``,
-        ``oy`` from its centre, at ``dist``), everyone inside the room."""
+    def _contacts(self, x, y) -> tuple[np.ndarray, np.ndarray]:
+        """Overlapping persons apart (half the overlap each), everyone inside the room. Nobody is pushed off the
+        robot: an overlap with it is a collision, left for the episode to see (and, when the robot is visible, for
+        the person's repulsion from it to undo)."""
         dx, dy = x[:, None, :] - x[:, :, None], y[:, None, :] - y[:, :, None]
         d = np.sqrt(dx * dx + dy * dy)
         d += forces._far(self.N)
@@ -193,12 +194,6 @@ class Worlds:
             push /= d
             x = x - (push * dx).sum(axis=2)
             y = y - (push * dy).sum(axis=2)
-        reach = self.radius + self.robot_radius
-        inside = dist < reach
-        if inside.any():
-            scale = reach[inside] / np.maximum(dist[inside], 1e-9)
-            x[inside] = (rx + ox * 0.0)[inside] + ox[inside] * scale
-            y[inside] = (ry + oy * 0.0)[inside] + oy[inside] * scale
         w, h = self.size
         r = self.radius
         return np.minimum(np.maximum(x, r), w - r), np.minimum(np.maximum(y, r), h - r)

@@ -1,0 +1,1 @@
+"""Experiments that take long: many runs or a training, one table or curve."""
