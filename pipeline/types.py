@@ -194,6 +194,19 @@ class TrackedPersons:
 
 
 @dataclass
+class TagReading:
+    """One reading of a tag worn by the followed person (seed 001 Sec. 3.2's RFID: a coarse range and azimuth,
+    all around the robot), in ``base_link``: ``range`` (m) and ``bearing`` (rad, counter-clockwise from x), with the
+    standard deviations of their errors as the sensor states them, for gating."""
+
+    stamp: float
+    range: float
+    bearing: float
+    range_sd: float
+    bearing_sd: float
+
+
+@dataclass
 class SocialRelations:
     """Weighted pairs of track ids (seed 000, coherent motion indicators)."""
 

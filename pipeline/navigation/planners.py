@@ -1,0 +1,239 @@
+"""Local planners behind one interface, so that a navigation policy can be swapped and compared in the loop:
+``Planner(params).command(stamp, pose, velocity, obstacles, tracks, goal) -> (v, omega)``.
+
+Every planner sees what a real robot has, all in ``odom``: its odometry pose, the (v, omega) it executed last, the
+laser returns as points, the people tracks, and the goal. Each is made from a dict of parameters: the robot's
+``radius`` (m), ``max_speed`` (m/s) and ``max_angular_speed`` (rad/s), required, and optional keys with defaults
+(``COMMON`` and the planner's ``DEFAULTS``, each with its source). ``PLANNERS`` names them:
+
+* ``zone``: Nearness Diagram over the laser points and the security zones of the tracked persons (seed 001 Sec. 7);
+* ``nd``: Nearness Diagram over the laser points alone (persons are obstacles like any other);
+* ``straight``: turn to the goal and drive, stopping for a laser return ahead (the route driver's safety stop);
+* ``social_force``: the robot as a social-force agent (Helbing & Molnar 1995), attracted by the goal and repelled
+  by the tracked persons and the laser returns.
+
+Every planner stops within ``goal_tolerance`` of the goal and brakes on the way in (v <= sqrt(2 a s) over the
+remaining distance s), so that the robot's acceleration limit does not carry it past the goal.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+from pipeline.frames import inverse, transform_points
+from pipeline.types import TrackedPersons
+
+from .nd import NDResult, NearnessDiagram, drive, nearest_per_sector
+from .zones import SecurityZones
+
+REQUIRED = ("radius", "max_speed", "max_angular_speed")
+COMMON = {
+    # m/s^2, the braking on the way to the goal: the robot's default (scenarios/format.py, robot.max_acceleration)
+    "max_acceleration": 0.5,
+    # m: well inside the follower's band (1-2 m behind the person), so that the follower, not the planner,
+    # decides where the robot stops; an assumption
+    "goal_tolerance": 0.1,
+}
+
+
+class Planner:
+    """A local planner: ``command`` gives the (v, omega) for the next tick, ``reset`` starts it over."""
+
+    name = "planner"
+    DEFAULTS: dict = {}
+
+    def __init__(self, params: dict):
+        self.p = _checked(self.name, params, {**COMMON, **self.DEFAULTS})
+
+    def reset(self) -> None:
+        """Start over (the planners here keep nothing between calls)."""
+
+    def command(self, stamp: float, pose: np.ndarray, velocity: np.ndarray, obstacles: np.ndarray,
+                tracks: TrackedPersons, goal: np.ndarray) -> tuple[float, float]:
+        """(v, omega) towards ``goal`` [2]: ``pose`` (3,) the odometry pose, ``velocity`` (v, omega) executed last
+        (part of the interface; none of the planners here needs it), ``obstacles`` [m, 2] laser returns (NaN rows
+        ignored), ``tracks`` and ``goal`` in odom."""
+        base = inverse(np.asarray(pose, float))
+        pts = np.asarray(obstacles, float).reshape(-1, 2)
+        pts = transform_points(base, pts[np.isfinite(pts).all(axis=1)])
+        g = transform_points(base, np.asarray(goal, float).reshape(1, 2))[0]
+        remaining = float(np.hypot(g[0], g[1])) - self.p["goal_tolerance"]
+        if remaining <= 0:
+            return 0.0, 0.0
+        c, s = np.cos(pose[2]), np.sin(pose[2])
+        persons = transform_points(base, tracks.position)
+        person_velocity = tracks.velocity @ np.array([[c, -s], [s, c]])  # rotated into base_link
+        v, omega = self._command(pts, persons, person_velocity, g)
+        return min(float(v), float(np.sqrt(2.0 * self.p["max_acceleration"] * remaining))), float(omega)
+
+    def _command(self, points, persons, person_velocity, goal) -> tuple[float, float]:
+        """The planner's own law, everything in base_link."""
+        raise NotImplementedError
+
+
+class NDPlanner(Planner):
+    """Nearness Diagram (pipeline/navigation/nd.py) over the laser returns; ``last`` keeps its latest result."""
+
+    name = "nd"
+    DEFAULTS = {
+        "security_distance": 0.5,  # m, ds: Player's nd driver default (avoid_dist), see nd.py
+        "sectors": 180,  # the authors' SECTORES (nd.py)
+        "wide_fraction": 0.25,  # a region wider than a quarter of the sectors is wide (nd.py)
+    }
+
+    def __init__(self, params: dict):
+        super().__init__(params)
+        p = self.p
+        self.nd = NearnessDiagram(p["radius"], p["max_speed"], p["max_angular_speed"], p["security_distance"],
+                                  int(p["sectors"]), p["wide_fraction"])
+        self.last: NDResult | None = None
+
+    def _command(self, points, persons, person_velocity, goal):
+        self.last = self.nd.solve(self._obstacles(points, persons, person_velocity), goal)
+        return self.last.v, self.last.omega
+
+    def _obstacles(self, points, persons, person_velocity) -> np.ndarray:
+        return points
+
+
+class ZonePlanner(NDPlanner):
+    """ND over the laser returns plus each tracked person's security zone, seen as a scan of virtual returns from
+    ``zone_rays`` rays around the robot (seed 001 Sec. 7: ND with persons as "obstacles with special zone needs").
+
+    A zone the robot is already in cannot be kept out of: if the robot stands in a person's sector (the person walks
+    towards it), that zone keeps its disc only; if it is in the disc, the zone is dropped and the laser alone keeps
+    the robot off the person.
+    """
+
+    name = "zone"
+    DEFAULTS = {
+        **NDPlanner.DEFAULTS,
+        "zone_radius": 0.5,  # m, r (seed 001 Fig. 11)
+        "zone_reach": 1.5,  # m, R (seed 001 Fig. 11)
+        "zone_opening_deg": 30.0,  # deg, omega, the sector's full opening (seed 001 Fig. 11; zones.py says why)
+        "standing_speed": 0.25,  # m/s, slower persons get the disc alone (zones.py says why)
+        "zone_rays": 360,  # two rays per ND sector, so each sector sees the zone's nearest boundary within 1 deg
+    }
+
+    def __init__(self, params: dict):
+        super().__init__(params)
+        p = self.p
+        self.zones = SecurityZones(p["zone_radius"], p["zone_reach"], np.radians(p["zone_opening_deg"]),
+                                   p["standing_speed"])
+        n = int(p["zone_rays"])
+        self.angles = -np.pi + (np.arange(n) + 0.5) * (2 * np.pi / n)
+        self.directions = np.stack([np.cos(self.angles), np.sin(self.angles)], axis=1)
+
+    def _obstacles(self, points, persons, person_velocity):
+        heading = np.arctan2(person_velocity[:, 1], person_velocity[:, 0])
+        walking = np.hypot(person_velocity[:, 0], person_velocity[:, 1]) >= self.zones.standing_speed
+        robot = np.zeros((1, 2))
+        in_zone = self.zones.inside_each(robot, persons, heading, walking)[0]
+        keep = np.hypot(persons[:, 0], persons[:, 1]) > self.zones.r
+        walking = walking & ~in_zone
+        ranges = self.zones.zone_ranges(robot[0], self.angles, persons[keep], heading[keep], walking[keep])
+        hit = np.isfinite(ranges)
+        return np.concatenate([points, ranges[hit, None] * self.directions[hit]])
+
+
+class StraightPlanner(Planner):
+    """Turn to the goal and drive; stop while a laser return lies in the robot's path nearer than
+    ``safety_distance`` (crowdsim's route driver and its safety stop, as a planner)."""
+
+    name = "straight"
+    DEFAULTS = {
+        "safety_distance": 0.6,  # m, the route driver's (scenarios/format.py, robot.safety_distance)
+        "heading_gain": 2.0,  # 1/s, omega = gain x heading error (the route driver, crowdsim/robot.py)
+        "drive_cone_deg": 60.0,  # deg, drive only with the goal within this of the heading (the route driver)
+        "corridor_margin": 0.1,  # m, the path is the robot's width plus this each side (the route driver's check)
+    }
+
+    def _command(self, points, persons, person_velocity, goal):
+        p = self.p
+        err = float(np.arctan2(goal[1], goal[0]))
+        omega = float(np.clip(p["heading_gain"] * err, -p["max_angular_speed"], p["max_angular_speed"]))
+        v = p["max_speed"] * np.cos(err) if abs(err) < np.radians(p["drive_cone_deg"]) else 0.0
+        ahead = (points[:, 0] > 0) & (np.abs(points[:, 1]) < p["radius"] + p["corridor_margin"])
+        if ahead.any() and points[ahead, 0].min() - p["radius"] < p["safety_distance"]:
+            v = 0.0
+        return v, omega
+
+
+class SocialForcePlanner(Planner):
+    """The robot as a social-force agent (Helbing & Molnar 1995, as robot navigation: Ferrer, Garrell & Sanfeliu,
+    IROS 2013): a goal attraction (v0 e - v)/tau, repulsions -grad V0 exp(-b/sigma) from each tracked person and
+    -grad U0 exp(-b/R) from the laser returns, b measured from the robot's edge (the robot keeps the clearance a
+    pedestrian keeps with its centre). Persons out of the robot's view (``fov_deg`` about the goal direction) weigh
+    ``out_of_view_weight``.
+
+    The command is the velocity at which the forces balance, v = v0 e + tau sum(f) (dv/dt = 0 in HM 1995 Eq. 1), at
+    most ``max_speed``, driven with ND's differential-drive law; the robot's acceleration limits do the relaxation.
+    Laser returns count once per direction (the nearest in each of ``obstacle_sectors`` sectors), so that a wall
+    weighs as much near as far whatever the beam density, and those within ``person_radius`` of a track are that
+    person's legs, already counted as the person.
+    """
+
+    name = "social_force"
+    DEFAULTS = {
+        "relaxation_time": 0.5,  # s, tau (HM 1995)
+        "person_strength": 2.1,  # m^2/s^2, V0 of the pedestrian potential (HM 1995)
+        "person_range": 0.3,  # m, sigma (HM 1995)
+        "obstacle_strength": 10.0,  # m^2/s^2, U0 of the wall potential (HM 1995)
+        "obstacle_range": 0.2,  # m, R of the wall potential (HM 1995)
+        "fov_deg": 200.0,  # deg, 2 phi, the field of view (HM 1995)
+        "out_of_view_weight": 0.5,  # c, weight of what is out of view (HM 1995)
+        "obstacle_sectors": 36,  # 10 deg each; an assumption: the walls' extent, not the beams', counts
+        # m, a person's laser returns lie this near the track: body radius 0.25 m (scenarios/format.py, adult)
+        # plus ~0.15 m of track position error; an assumption
+        "person_radius": 0.4,
+    }
+
+    def _command(self, points, persons, person_velocity, goal):
+        p = self.p
+        e = goal / np.hypot(goal[0], goal[1])
+        dist = np.hypot(persons[:, 0], persons[:, 1])
+        away = -persons / np.maximum(dist, 1e-9)[:, None]
+        seen = (persons @ e) >= np.cos(np.radians(p["fov_deg"]) / 2) * dist
+        weight = np.where(seen, 1.0, p["out_of_view_weight"])
+        push = weight * p["person_strength"] / p["person_range"] * np.exp(
+            -np.maximum(dist - p["radius"], 0.0) / p["person_range"])
+        force = push @ away
+        if len(persons):  # squared point-person distances [m, k] as |a|^2 + |b|^2 - 2 a.b: one matrix product
+            d2 = (points ** 2).sum(axis=1)[:, None] + (persons ** 2).sum(axis=1)[None, :] - 2.0 * points @ persons.T
+            points = points[d2.min(axis=1) > p["person_radius"] ** 2]
+        d, nearest = nearest_per_sector(points, int(p["obstacle_sectors"]))
+        seen = np.isfinite(d)
+        push = p["obstacle_strength"] / p["obstacle_range"] * np.exp(
+            -np.maximum(d[seen] - p["radius"], 0.0) / p["obstacle_range"])
+        force = force - push @ (nearest[seen] / d[seen, None])
+        want = p["max_speed"] * e + p["relaxation_time"] * force
+        speed = min(float(np.hypot(want[0], want[1])), p["max_speed"])
+        return drive(speed, float(np.arctan2(want[1], want[0])), p["max_angular_speed"])
+
+
+PLANNERS: dict[str, type[Planner]] = {
+    "zone": ZonePlanner,
+    "nd": NDPlanner,
+    "straight": StraightPlanner,
+    "social_force": SocialForcePlanner,
+}
+
+
+def _checked(name: str, params: dict, defaults: dict) -> dict:
+    """The parameters with defaults filled in; ValueError naming the planner and key for an unknown or missing
+    key or a value that is not a finite number >= 0 (the radius > 0)."""
+    unknown = sorted(set(params) - set(defaults) - set(REQUIRED))
+    if unknown:
+        raise ValueError(f"planner {name}: unknown parameter(s) {unknown}; expected {sorted([*REQUIRED, *defaults])}")
+    missing = [key for key in REQUIRED if key not in params]
+    if missing:
+        raise ValueError(f"planner {name}: missing parameter(s) {missing}")
+    merged = {**defaults, **params}
+    for key, value in merged.items():
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value < 0:
+            raise ValueError(f"planner {name}: {key} must be a finite number >= 0, got {value!r}")
+    if merged["radius"] <= 0:
+        raise ValueError(f"planner {name}: radius must be > 0 m, got {merged['radius']!r}")
+    return merged

@@ -1,0 +1,72 @@
+"""A tag sensor like seed 001's RFID: the range and bearing of the one tagged person, all around the robot.
+
+Seed 001 Sec. 3.2 gives what its reader does: it detects the tag "around the robot (360 deg FOV) within the range of
+0.5 m to 4.5 m" and yields "a coarse position estimate (range and azimuth)"; Fig. 3(c) shows it as a blob spanning
+tens of degrees. Neither seed 001 nor what is at hand of its ref [5] (Germa et al., CVIU 2010) states the errors,
+the detection rate or the read rate, so those defaults are assumptions, sized to "coarse":
+
+* bearing sd 20 deg: a reader that locates the tag by which antennas of a ring around the robot receive it resolves
+  about one antenna lobe (tens of degrees), as Fig. 3(c)'s blob shows;
+* range sd 0.5 m: signal-strength ranging, an eighth of the 4 m span;
+* detection probability 0.9 per read: body shadowing loses some reads;
+* 5 Hz: a read cycle of a few antennas; well above the seed's 1 Hz system cycle (Sec. 7), so the tag is not
+  what limits it.
+
+Errors are Gaussian, drawn fresh per reading; the reported range is kept within the coverage, the bearing wrapped.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.frames import inverse, transform_points, wrap_angle
+from pipeline.types import TagReading
+
+TAG_DEFAULTS = {
+    "rate": 5.0,  # Hz, an assumption (see above)
+    "range_min": 0.5,  # m, seed 001 Sec. 3.2
+    "range_max": 4.5,  # m, seed 001 Sec. 3.2
+    "range_sd": 0.5,  # m, an assumption (see above)
+    "bearing_sd_deg": 20.0,  # deg, an assumption (see above)
+    "detection_probability": 0.9,  # an assumption (see above)
+}
+
+
+class TagSensor:
+    """Reads the tag at ``rate`` Hz from the robot's true pose; ``params`` override ``TAG_DEFAULTS``."""
+
+    def __init__(self, params: dict, rng: np.random.Generator):
+        unknown = sorted(set(params) - set(TAG_DEFAULTS))
+        if unknown:
+            raise ValueError(f"tag sensor: unknown parameter(s) {unknown}; expected {sorted(TAG_DEFAULTS)}")
+        p = {**TAG_DEFAULTS, **params}
+        if not (p["rate"] > 0 and 0 <= p["range_min"] < p["range_max"] < np.inf):
+            raise ValueError("tag sensor: rate must be > 0 Hz and 0 <= range_min < range_max finite m; got "
+                             f"rate={p['rate']}, range_min={p['range_min']}, range_max={p['range_max']}")
+        if not (p["range_sd"] >= 0 and p["bearing_sd_deg"] >= 0 and 0 <= p["detection_probability"] <= 1):
+            raise ValueError("tag sensor: range_sd and bearing_sd_deg must be >= 0, detection_probability in "
+                             f"[0, 1]; got {p['range_sd']}, {p['bearing_sd_deg']}, {p['detection_probability']}")
+        self.p, self.rng = p, rng
+        self.period = 1.0 / p["rate"]
+        self.bearing_sd = float(np.radians(p["bearing_sd_deg"]))
+        self._next: float | None = None
+
+    def read(self, stamp: float, robot_pose_world: np.ndarray, target_xy_world: np.ndarray | None) -> TagReading | None:
+        """The reading due at ``stamp`` (None between reads, with no tagged person, out of coverage, or missed)."""
+        if self._next is not None and stamp < self._next - 1e-9:
+            return None
+        self._next = (stamp if self._next is None else self._next) + self.period
+        if self._next <= stamp:  # called after a pause: read at the rate from now on
+            self._next = stamp + self.period
+        if target_xy_world is None:
+            return None
+        p = self.p
+        rel = transform_points(inverse(np.asarray(robot_pose_world, float)),
+                               np.asarray(target_xy_world, float).reshape(1, 2))[0]
+        true_range = float(np.hypot(rel[0], rel[1]))
+        if not p["range_min"] <= true_range <= p["range_max"] or self.rng.random() >= p["detection_probability"]:
+            return None
+        noise = self.rng.standard_normal(2)
+        reported = float(np.clip(true_range + p["range_sd"] * noise[0], p["range_min"], p["range_max"]))
+        bearing = float(wrap_angle(np.arctan2(rel[1], rel[0]) + self.bearing_sd * noise[1]))
+        return TagReading(stamp, reported, bearing, float(p["range_sd"]), self.bearing_sd)
