@@ -164,7 +164,7 @@ def test_collision_terminates_with_the_collision_term():
     _, reward, terminated, truncated, info = env.step(np.zeros(2))
     assert terminated and not truncated and info["collision"]
     assert reward == pytest.approx(-0.25)  # CrowdNav: collision alone, no discomfort on top
-    assert info["episode_metrics"]["collision"]
+    assert info["episode_metrics"]["collision_person"]
 
 
 def test_reaching_the_goal_terminates_with_success():
@@ -188,9 +188,9 @@ def test_discomfort_is_crowdnavs_below_two_decimetres():
     w.v0[0] = 0.0
     _, reward, terminated, _, info = env.step(np.zeros(2))
     assert not terminated
-    gap = info["reward_terms"]["discomfort"] / 0.2 + 0.2  # (gap - 0.2) x 0.2 s
+    gap = 0.2 - info["reward_terms"]["discomfort"] / 0.2  # (0.2 - gap) x 0.2 s
     assert gap == pytest.approx(0.1, abs=0.01)
-    assert reward == pytest.approx(0.5 * (gap - 0.2) * 0.2)
+    assert reward == pytest.approx(-0.5 * (0.2 - gap) * 0.2)
 
 
 def test_time_limit_truncates():
@@ -210,7 +210,7 @@ def test_robot_visibility_changes_how_people_react():
         w.crowd_p = {**w.crowd_p, "random_force": 0.0}
         w.robot_pose[0] = [6.0, 4.0, 0.0]
         w.x[0], w.y[0], w.gx[0], w.gy[0], w.v0[0] = 3.0, 4.3, 11.0, 4.3, 1.2  # passing 0.3 m off the robot's centre
-        closest[visible] = min(w.tick(np.zeros((1, 2)), np.zeros((2, 1, 1)))[0] for _ in range(150))
+        closest[visible] = min(w.tick(np.zeros((1, 2)), np.zeros((1, 1), complex))[0] for _ in range(150))
     assert closest[False] < 0.0  # walked into: contacts push them out again each tick
     assert closest[True] > 0.0
 
@@ -254,3 +254,52 @@ def test_rerun_recording_and_flattened_observations(tmp_path):
         assert env.observation_space.contains(obs)
     env.close()
     assert path.stat().st_size > 1000
+
+
+def test_zone_term_counts_the_robot_ahead_of_a_walker_not_behind():
+    env = CrowdEnv(people=1)
+    env.reset(seed=0)
+    w = env.episodes.worlds
+    w.vx[0], w.vy[0] = 1.0, 0.0  # walking +x at 1 m/s
+    w.x[0], w.y[0] = 5.0, 4.0
+    from crowdsim.envs.reward import in_zone
+
+    for robot_x, expected in ((6.2, True), (5.4, True), (3.8, False), (6.2 + 0.5, False)):
+        w.robot_pose[0] = [robot_x, 4.0, 0.0]
+        assert in_zone(w)[0] == expected, robot_x  # the sector reaches R = 1.5 m ahead, the disc r = 0.5 m round
+    w.robot_pose[0] = [5.0, 4.0 + 0.7, 0.0]  # beside, beyond the disc and outside the 30-degree sector
+    assert not in_zone(w)[0]
+    w.vx[0] = 0.1  # standing (below 0.25 m/s): the disc alone
+    w.robot_pose[0] = [6.2, 4.0, 0.0]
+    assert not in_zone(w)[0]
+
+
+def test_follow_observes_the_tag_and_scores_the_band():
+    env = CrowdEnv(task="follow", people=3, observation="truth")
+    obs, _ = env.reset(seed=0)
+    w = env.episodes.worlds
+    # the target (person 0) starts 1.5 m ahead of the robot: within the tag's 0.5-4.5 m, inside the 1-2 m band
+    assert obs["target"][:2] == pytest.approx([1.5, 0.0], abs=0.2)
+    readings = []
+    for _ in range(30):
+        obs, reward, terminated, truncated, info = env.step(np.zeros(2))
+        if obs["tag"][2]:
+            truth = np.hypot(*(np.array([w.x[0, 0], w.y[0, 0]]) - w.robot_pose[0, :2]))
+            readings.append(obs["tag"][0] - truth)
+        d = np.hypot(w.x[0, 0] - w.robot_pose[0, 0], w.y[0, 0] - w.robot_pose[0, 1])
+        inside = 1.0 <= d <= 2.0
+        assert info["reward_terms"]["band"] == pytest.approx(0.2 if inside else 0.0)
+        assert info["reward_terms"]["band_distance"] == pytest.approx(0.0 if inside else
+                                                                      max(1.0 - d, d - 2.0) * 0.2)
+    assert len(readings) > 5  # the target walks away from the standing robot: read until beyond 4.5 m
+    assert abs(np.mean(readings)) < 0.5
+
+
+def test_follow_episode_metrics_come_at_the_time_limit():
+    env = CrowdEnv(task="follow", people=4, observation="tracks", time_limit=2.0)
+    env.reset(seed=1)
+    for _ in range(10):
+        *_, terminated, truncated, info = env.step(np.zeros(2))
+    assert truncated and not terminated
+    m = info["episode_metrics"]
+    assert m["success"] and 0.0 <= m["in_band_share"] <= 1.0 and m["target_losses"] >= 0

@@ -86,6 +86,8 @@ class Episodes:
         if self.ticks < 1 or abs(self.ticks * self.scenario["dt"] - config.control_period) > 1e-9:
             raise ValueError(f"control_period: expected a whole number of {self.scenario['dt']} s ticks, "
                              f"got {config.control_period}")
+        robot = self.scenario["robot"]
+        self.top_speed = np.array([robot["max_speed"], robot["max_angular_speed"]])  # actions of 1 command these
         self.sensing = "laser" in config.observation or "tracks" in config.observation
         self.observer = Observer(config, self.scenario)
         self.reward = Reward(config.reward, config.task)
@@ -180,16 +182,17 @@ class Episodes:
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict]]:
         """One control period for every episode: actions [E, 2] in [-1, 1] scaled to the robot's limits. Returns
         rewards, terminated, truncated [E] and one info per episode."""
-        w, p = self.worlds, self.scenario["robot"]
-        a = np.clip(np.asarray(actions, float).reshape(self.n, 2), -1.0, 1.0)
-        command = a * np.array([p["max_speed"], p["max_angular_speed"]])
-        noise = np.stack([g.normal(0.0, w.crowd_p["random_force"], (self.ticks, 2, w.N)) for g in self.noise_rng], 2)
+        w = self.worlds
+        command = np.minimum(np.maximum(np.asarray(actions, float).reshape(self.n, 2), -1.0), 1.0) * self.top_speed
+        draws = np.stack([g.normal(0.0, w.crowd_p["random_force"], (self.ticks, 2, w.N)) for g in self.noise_rng], 2)
+        noise = draws[:, 0] + 1j * draws[:, 1]  # [ticks, E, N]
         gap = np.full(self.n, np.inf)
         at_collision = {}  # episode -> its state at the tick of its first collision, for the log
         for t in range(self.ticks):
             tick_gap = w.tick(command, noise[t])
-            for k in np.flatnonzero((tick_gap < 0) & (gap >= 0)):
-                at_collision[k] = self._state(k)
+            if (tick_gap < 0).any():
+                for k in np.flatnonzero((tick_gap < 0) & (gap >= 0)):
+                    at_collision[k] = self._state(k)
             gap = np.minimum(gap, tick_gap)
         self.elapsed += self.ticks * w.dt
         for k in range(self.n):
@@ -216,7 +219,7 @@ class Episodes:
 
     def _state(self, k: int) -> tuple:
         w = self.worlds
-        return float(w.t[k]), w.robot_pose[k].copy(), w.position[k].copy(), w.velocity[k].copy()
+        return float(w.t[k]), w.robot_pose[k].copy(), w.z[k].copy(), w.v[k].copy()
 
     def _log(self, k: int, state: tuple | None) -> None:
         """One entry per step: the state at its end, or at the tick of a collision within it; for following, the
@@ -246,8 +249,8 @@ class Episodes:
         log, w = self.log[k], self.worlds
         T, N = len(log), w.N
         persons = PersonRows(np.repeat(np.arange(T), N), np.tile(np.arange(1, N + 1), T),
-                             np.concatenate([e[2] for e in log]).reshape(-1, 2),
-                             np.concatenate([e[3] for e in log]).reshape(-1, 2), np.tile(w.radius[k], T))
+                             np.concatenate([e[2] for e in log]).view(float).reshape(-1, 2),
+                             np.concatenate([e[3] for e in log]).view(float).reshape(-1, 2), np.tile(w.radius[k], T))
         common = dict(stamp=np.array([e[0] for e in log]), robot_pose=np.array([e[1] for e in log]),
                       robot_radius=w.robot_radius, persons=persons, walls=w.walls, time_limit=self.config.time_limit)
         if self.config.task == "follow":

@@ -75,11 +75,11 @@ class Observer:
             gx, gy = w.goal[:, 0] - pose[:, 0], w.goal[:, 1] - pose[:, 1]
             out["goal"] = np.stack([c * gx + s * gy, -s * gx + c * gy], 1)
         if "truth" in self.config.observation:
-            dx, dy = w.x - pose[:, 0:1], w.y - pose[:, 1:2]
-            rows = np.stack([c[:, None] * dx + s[:, None] * dy, -s[:, None] * dx + c[:, None] * dy,
-                             c[:, None] * w.vx + s[:, None] * w.vy, -s[:, None] * w.vx + c[:, None] * w.vy,
-                             w.radius], axis=-1)
-            out["persons"], out["persons_mask"] = _nearest(rows, dx * dx + dy * dy, K)
+            turn = (c - 1j * s)[:, None]  # world -> robot frame: a rotation by -yaw
+            rel = (w.z - (pose[:, 0] + 1j * pose[:, 1])[:, None]) * turn
+            vel = w.v * turn
+            rows = np.stack([rel.real, rel.imag, vel.real, vel.imag, w.radius], axis=-1)
+            out["persons"], out["persons_mask"] = _nearest(rows, np.abs(rel), K)
             if self.follow:
                 out["target"] = rows[:, 0, :4]
         if "laser" in self.config.observation:

@@ -28,8 +28,9 @@ ARRIVED = 0.5  # m: a person this near their current route place heads for the n
 
 
 class Worlds:
-    """E worlds of one layout with N persons each: person arrays are [E, N] (positions and velocities by
-    component: array calls on contiguous [E, N] arrays are the cheapest there are), robot arrays [E, ...]."""
+    """E worlds of one layout with N persons each: person arrays are [E, N], positions and velocities as complex
+    numbers x + iy (one array call per vector operation: at these sizes the calls are the cost); robot arrays
+    [E, ...]."""
 
     def __init__(self, n_worlds: int, people: int, layout: str, scenario: dict, robot_visible: bool = True):
         if layout not in LAYOUTS:
@@ -46,20 +47,27 @@ class Worlds:
         self.types = AgentTypes(self.crowd_p["agent_types"])
         self.kind = self.types.names.index("adult") if "adult" in self.types.names else 0
         shape = (n_worlds, people)
-        self.x, self.y, self.vx, self.vy = (np.zeros(shape) for _ in range(4))
+        self.z, self.v, self.goal_z = (np.zeros(shape, complex) for _ in range(3))  # goal_z: the place headed for
         self.v0 = np.zeros(shape)
         self.radius = np.full(shape, self.types.radius[self.kind])
         self.walked = np.zeros(shape)
-        self.route = np.zeros(shape + (1, 2))
+        self.route = np.zeros(shape + (1,), complex)
         self.route_length = np.ones(shape, np.int64)
         self.place = np.zeros(shape, np.int64)  # index of the route place each is heading for
-        self.gx, self.gy = np.zeros(shape), np.zeros(shape)  # the place each is heading for
         self.robot_pose = np.zeros((n_worlds, 3))
         self.robot_velocity = np.zeros((n_worlds, 2))
         self.goal = np.zeros((n_worlds, 2))
         self.t = np.zeros(n_worlds)
         self.size = (0.0, 0.0)
         self._wall_gap, self._facing = np.zeros((4,) + shape), np.zeros((4,) + shape)
+
+    # by component, as views (writing to them writes the state)
+    x = property(lambda self: self.z.real)
+    y = property(lambda self: self.z.imag)
+    vx = property(lambda self: self.v.real)
+    vy = property(lambda self: self.v.imag)
+    gx = property(lambda self: self.goal_z.real)
+    gy = property(lambda self: self.goal_z.imag)
 
     @property
     def walls(self) -> np.ndarray:
@@ -68,34 +76,34 @@ class Worlds:
     @property
     def position(self) -> np.ndarray:
         """[E, N, 2]"""
-        return np.stack([self.x, self.y], axis=-1)
+        return np.stack([self.z.real, self.z.imag], axis=-1)
 
     @property
     def velocity(self) -> np.ndarray:
         """[E, N, 2]"""
-        return np.stack([self.vx, self.vy], axis=-1)
+        return np.stack([self.v.real, self.v.imag], axis=-1)
 
     def reset(self, k: int, rng: np.random.Generator) -> Layout:
         """Start world k over from a new layout drawn with ``rng``."""
         lay = self.layout(self.N, rng)
         width = lay.route.shape[1]
         if width != self.route.shape[2]:  # the layout's route width, known once the first is drawn
-            self.route = np.zeros((self.E, self.N, width, 2))
+            self.route = np.zeros((self.E, self.N, width), complex)
         self.size = lay.size
-        self.x[k], self.y[k] = lay.start.T
-        self.vx[k], self.vy[k], self.walked[k] = 0.0, 0.0, 0.0
+        self.z[k] = lay.start[:, 0] + 1j * lay.start[:, 1]
+        self.v[k], self.walked[k] = 0.0, 0.0
         v0 = self.types.desired_speeds(np.full(self.N, self.kind), rng)
         self.v0[k] = v0 if lay.speed is None else np.where(np.isnan(lay.speed), v0, lay.speed)
-        self.route[k], self.route_length[k], self.place[k] = lay.route, lay.route_length, 0
-        self.gx[k], self.gy[k] = lay.route[:, 0].T
+        self.route[k], self.route_length[k], self.place[k] = lay.route[..., 0] + 1j * lay.route[..., 1], \
+            lay.route_length, 0
+        self.goal_z[k] = self.route[k, :, 0]
         self.robot_pose[k], self.robot_velocity[k], self.goal[k], self.t[k] = lay.robot_start, 0.0, lay.robot_goal, 0.0
         return lay
 
     def tick(self, command: np.ndarray, noise: np.ndarray) -> np.ndarray:
-        """Advance every world one step dt: the persons by their forces (``noise`` [2, E, N] the random force's
-        components), the robots by ``command`` [E, 2] (v, omega) within their limits. Returns each world's smallest
-        gap between the robot's disc and a person's or a wall, before contacts push anyone apart [E] (negative: a
-        collision)."""
+        """Advance every world one step dt: the persons by their forces (``noise`` [E, N] the random force, complex),
+        the robots by ``command`` [E, 2] (v, omega) within their limits. Returns each world's smallest gap between
+        the robot's disc and a person's or a wall, before contacts push anyone apart [E] (negative: a collision)."""
         p, dt = self.crowd_p, self.dt
         self.robot_velocity = limited(command, self.robot_velocity, self.robot_p, dt)
         self.robot_pose = compose(self.robot_pose, arc(self.robot_velocity[:, 0], self.robot_velocity[:, 1], dt))
@@ -103,100 +111,84 @@ class Worlds:
         gap = self.robot_wall_gap()
         if self.N == 0:
             return gap
-        x, y, vx, vy, v0 = self.x, self.y, self.vx, self.vy, self.v0
-        ex, ey = self.gx - x, self.gy - y
-        norm = np.sqrt(ex * ex + ey * ey)
-        np.maximum(norm, 1e-9, out=norm)
-        ex /= norm
-        ey /= norm
-        tau = p["relaxation_time"]
-        ax, ay = (v0 * ex - vx) / tau, (v0 * ey - vy) / tau
-        fx, fy = forces.moussaid2009_dense(x, y, vx, vy, ex, ey, p["moussaid_strength"], p["moussaid_lambda"],
-                                           p["moussaid_gamma"], p["moussaid_n"], p["moussaid_n_prime"], p["fov_deg"],
-                                           p["out_of_view_weight"])
-        ax += fx
-        ay += fy
-        fx, fy = self._wall_force(ex, ey)
-        ax += fx
-        ay += fy
-        rx, ry = self.robot_pose[:, 0:1], self.robot_pose[:, 1:2]
+        z, v, v0 = self.z, self.v, self.v0
+        e = self.goal_z - z
+        e /= np.maximum(np.abs(e), 1e-9)
+        acc = (v0 * e - v) / p["relaxation_time"]
+        acc += forces.moussaid2009_dense(z, v, e, p["moussaid_strength"], p["moussaid_lambda"], p["moussaid_gamma"],
+                                         p["moussaid_n"], p["moussaid_n_prime"], p["fov_deg"],
+                                         p["out_of_view_weight"])
+        acc += self._wall_force(e)
+        robot = (self.robot_pose[:, 0] + 1j * self.robot_pose[:, 1])[:, None]
         if self.robot_visible:
-            fx, fy = self._robot_force(ex, ey, rx, ry)
-            ax += fx
-            ay += fy
-        ax += noise[0]
-        ay += noise[1]
-        nvx, nvy = vx + ax * dt, vy + ay * dt
-        back = np.minimum(nvx * ex + nvy * ey, 0.0)  # pressure stops a walker; it does not walk them backwards
-        nvx -= back * ex
-        nvy -= back * ey
-        cap = np.minimum(1.0, p["max_speed_factor"] * v0 / np.maximum(np.sqrt(nvx * nvx + nvy * nvy), 1e-9))
-        nx, ny = x + nvx * cap * dt, y + nvy * cap * dt
-        ox, oy = nx - rx, ny - ry
-        dist = np.sqrt(ox * ox + oy * oy)
-        gap = np.minimum(gap, (dist - self.radius - self.robot_radius).min(axis=1))
-        nx, ny = self._contacts(nx, ny)
-        self.vx, self.vy = (nx - x) / dt, (ny - y) / dt
-        self.x, self.y = nx, ny
-        self.walked += np.sqrt(self.vx * self.vx + self.vy * self.vy) * dt
-        arrived = (self.gx - nx) ** 2 + (self.gy - ny) ** 2 < ARRIVED ** 2
+            acc += self._robot_force(e, robot)
+        acc += noise
+        nv = v + acc * dt
+        back = np.minimum((nv * e.conjugate()).real, 0.0)  # pressure stops a walker; it does not walk them backwards
+        nv -= back * e
+        nv *= np.minimum(1.0, p["max_speed_factor"] * v0 / np.maximum(np.abs(nv), 1e-9))
+        nz = z + nv * dt
+        gap = np.minimum(gap, (np.abs(nz - robot) - self.radius - self.robot_radius).min(axis=1))
+        nz = self._contacts(nz)
+        self.v = (nz - z) / dt
+        self.z = nz
+        self.walked += np.abs(self.v) * dt
+        arrived = np.abs(self.goal_z - nz) < ARRIVED
         if arrived.any():
             self.place[arrived] = (self.place[arrived] + 1) % self.route_length[arrived]
-            self.gx[arrived], self.gy[arrived] = self.route[arrived, self.place[arrived]].T
+            self.goal_z[arrived] = self.route[arrived, self.place[arrived]]
         return gap
 
-    def _in_view(self, ex, ey, fx, fy) -> np.ndarray:
-        """``forces.in_view_weight`` by component."""
+    def _in_view(self, e, f) -> np.ndarray:
+        """``forces.in_view_weight`` on complex vectors."""
         p = self.crowd_p
-        seen = -(ex * fx + ey * fy) >= np.sqrt(fx * fx + fy * fy) * np.cos(np.radians(p["fov_deg"]) / 2)
+        seen = -(e.conjugate() * f).real >= np.abs(f) * np.cos(np.radians(p["fov_deg"]) / 2)
         return np.where(seen, 1.0, p["out_of_view_weight"])
 
-    def _robot_force(self, ex, ey, rx, ry) -> tuple[np.ndarray, np.ndarray]:
-        """``forces.obstacle_disc_force`` from each world's robot on its persons."""
+    def _robot_force(self, e, robot) -> np.ndarray:
+        """``forces.obstacle_disc_force`` from each world's robot (at ``robot`` [E, 1]) on its persons."""
         p = self.crowd_p
-        ox, oy = self.x - rx, self.y - ry
-        dist = np.maximum(np.sqrt(ox * ox + oy * oy), 1e-9)
-        mag = p["robot_strength"] / p["robot_range"] * np.exp(
-            -np.maximum(dist - self.robot_radius, 0.0) / p["robot_range"]) / dist
-        fx, fy = mag * ox, mag * oy
-        w = self._in_view(ex, ey, fx, fy)
-        return fx * w, fy * w
+        away = self.z - robot
+        dist = np.maximum(np.abs(away), 1e-9)
+        f = away * (p["robot_strength"] / p["robot_range"] * np.exp(
+            -np.maximum(dist - self.robot_radius, 0.0) / p["robot_range"]) / dist)
+        return f * self._in_view(e, f)
 
-    def _wall_force(self, ex, ey) -> tuple[np.ndarray, np.ndarray]:
+    def _wall_force(self, e) -> np.ndarray:
         """``forces.wall_force`` from the room's four walls, whose normals are the axes: the gap to each wall is a
         coordinate, and a wall is in view when the walker faces it within the field of view."""
         p = self.crowd_p
         w, h = self.size
+        x, y = self.z.real, self.z.imag
         dist, facing = self._wall_gap, self._facing  # to the left, right, bottom and top walls
-        dist[0], dist[2] = self.x, self.y
-        np.subtract(w, self.x, out=dist[1])
-        np.subtract(h, self.y, out=dist[3])
-        facing[0], facing[2] = ex, ey
+        dist[0], dist[2] = x, y
+        np.subtract(w, x, out=dist[1])
+        np.subtract(h, y, out=dist[3])
+        facing[0], facing[2] = e.real, e.imag
         np.negative(facing[0], out=facing[1])
         np.negative(facing[2], out=facing[3])
         facing = facing <= -np.cos(np.radians(p["fov_deg"]) / 2)  # the force (away from the wall) against e
         mag = np.exp((self.radius - dist) / p["wall_range"])
         mag *= np.where(facing, p["wall_strength"], p["wall_strength"] * p["out_of_view_weight"])
         mag *= dist < p["wall_interaction_range"]
-        return mag[0] - mag[1], mag[2] - mag[3]
+        return (mag[0] - mag[1]) + 1j * (mag[2] - mag[3])
 
-    def _contacts(self, x, y) -> tuple[np.ndarray, np.ndarray]:
+    def _contacts(self, z) -> np.ndarray:
         """Overlapping persons apart (half the overlap each), everyone inside the room. Nobody is pushed off the
         robot: an overlap with it is a collision, left for the episode to see (and, when the robot is visible, for
         the person's repulsion from it to undo)."""
-        dx, dy = x[:, None, :] - x[:, :, None], y[:, None, :] - y[:, :, None]
-        d = np.sqrt(dx * dx + dy * dy)
+        dz = z[:, None, :] - z[:, :, None]
+        d = np.abs(dz)
         d += forces._far(self.N)
         push = self.radius[:, :, None] + self.radius[:, None, :] - d
         if (push > 0).any():
             np.maximum(push, 0.0, out=push)
             push *= 0.5
             push /= d
-            x = x - (push * dx).sum(axis=2)
-            y = y - (push * dy).sum(axis=2)
+            z = z - (push * dz).sum(axis=2)
         w, h = self.size
         r = self.radius
-        return np.minimum(np.maximum(x, r), w - r), np.minimum(np.maximum(y, r), h - r)
+        return np.minimum(np.maximum(z.real, r), w - r) + 1j * np.minimum(np.maximum(z.imag, r), h - r)
 
     def robot_wall_gap(self) -> np.ndarray:
         """Distance from each robot's disc to the nearest wall of the room [E]."""
