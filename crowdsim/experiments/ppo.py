@@ -139,6 +139,9 @@ def run_ppo(out: Path, minutes: float, envs: int = 8, people: int = 10, seed: in
         raise SystemExit(f"{_install_hint()} ({error})")
     from tqdm import tqdm
 
+    import torch
+
+    torch.set_num_threads(1)  # a small policy: more threads only contend with the environments for the cores
     venv = make_vec_env(envs, people, seed)
     budget = minutes * 60.0
     rows: list[tuple[int, float, bool]] = []
@@ -149,7 +152,7 @@ def run_ppo(out: Path, minutes: float, envs: int = 8, people: int = 10, seed: in
         def _on_training_start(self):
             self.returns = np.zeros(envs)
             self.start = time.perf_counter()
-            self.bar = tqdm(total=round(budget), desc="training", unit="s", disable=not progress)
+            self.bar = tqdm(total=round(budget), desc="training", unit="s", mininterval=5.0, disable=not progress)
 
         def _on_step(self) -> bool:
             self.returns += self.locals["rewards"]
@@ -158,9 +161,10 @@ def run_ppo(out: Path, minutes: float, envs: int = 8, people: int = 10, seed: in
                     rows.append((self.num_timesteps, float(self.returns[i]), bool(info["episode_metrics"]["success"])))
                     self.returns[i] = 0.0
             elapsed = time.perf_counter() - self.start
-            self.bar.n = min(round(elapsed), round(budget))
-            self.bar.set_postfix(steps=self.num_timesteps, episodes=len(rows), refresh=False)
-            self.bar.refresh()
+            advance = min(int(elapsed), round(budget)) - self.bar.n
+            if advance > 0:  # the bar redraws at most every few seconds (tqdm's miniters and mininterval)
+                self.bar.set_postfix(steps=self.num_timesteps, episodes=len(rows), refresh=False)
+                self.bar.update(advance)
             return elapsed < budget
 
         def _on_training_end(self):
