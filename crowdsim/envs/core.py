@@ -55,7 +55,8 @@ class Config:
     time_limit: float = 30.0  # s
     k_nearest: int = 10
     reward: str | dict = "default"
-    scenario_overrides: dict = field(default_factory=dict)  # keys laid over ENV_SCENARIO (robot limits, laser)
+    # scenario keys laid over ENV_SCENARIO (a mapping's keys over its keys: {"robot": {"max_speed": 1.0}})
+    scenario_overrides: dict = field(default_factory=dict)
 
     def __post_init__(self):
         if self.task not in TASKS:
@@ -80,7 +81,9 @@ class Episodes:
 
     def __init__(self, n: int, config: Config):
         self.n, self.config = n, config
-        raw = {**ENV_SCENARIO, **config.scenario_overrides}
+        raw = {key: {**ENV_SCENARIO[key], **value} if isinstance(ENV_SCENARIO.get(key), dict) else value
+               for key, value in config.scenario_overrides.items()}
+        raw = {**ENV_SCENARIO, **raw}
         self.scenario = scenario_from_dict(raw, source="<environment scenario>")
         self.ticks = int(round(config.control_period / self.scenario["dt"]))
         if self.ticks < 1 or abs(self.ticks * self.scenario["dt"] - config.control_period) > 1e-9:
