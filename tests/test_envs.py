@@ -123,13 +123,15 @@ def test_async_vector_env_runs():
 
 
 def test_disabled_autoreset_resets_only_the_masked_envs():
-    vec = CrowdEnvVector = gym.make_vec("crowdsim/Navigate-v0", num_envs=2, vectorization_mode="vector_entry_point",
-                                        people=4, autoreset_mode=AutoresetMode.DISABLED)
-    first, _ = CrowdEnvVector.reset(seed=4)
+    vec = gym.make_vec("crowdsim/Navigate-v0", num_envs=2, vectorization_mode="vector_entry_point", people=4,
+                       autoreset_mode=AutoresetMode.DISABLED)
+    first, _ = vec.reset(seed=4)
     vec.step(np.ones((2, 2)))
     obs, _ = vec.reset(options={"reset_mask": np.array([False, True])})
-    assert not np.array_equal(obs["persons"][0], first["persons"][0])  # env 0 carried on
-    assert not np.array_equal(obs["persons"][1], first["persons"][1])  # env 1 started a new episode (own generator)
+    assert vec.unwrapped.episodes.elapsed.tolist() == [pytest.approx(0.2), 0.0]  # env 0 carried on, env 1 restarted
+    assert obs["velocity"][0, 0] == pytest.approx(0.1)  # 0.5 m/s^2 for 0.2 s
+    assert obs["velocity"][1].tolist() == [0.0, 0.0]
+    assert not np.array_equal(obs["persons"][1], first["persons"][1])  # a new crowd from its own generator
 
 
 def test_truth_observation_is_in_the_robot_frame_nearest_first():
@@ -303,3 +305,12 @@ def test_follow_episode_metrics_come_at_the_time_limit():
     assert truncated and not terminated
     m = info["episode_metrics"]
     assert m["success"] and 0.0 <= m["in_band_share"] <= 1.0 and m["target_losses"] >= 0
+
+
+def test_vector_reset_takes_numpy_seeds_and_refuses_partial_option_changes():
+    vec = gym.make_vec("crowdsim/Navigate-v0", num_envs=2, vectorization_mode="vector_entry_point", people=3)
+    a, _ = vec.reset(seed=np.int64(5))
+    b, _ = vec.reset(seed=5)
+    assert np.array_equal(a["persons"], b["persons"])
+    with pytest.raises(ValueError, match="expected no reset_mask"):
+        vec.reset(options={"people": 4, "reset_mask": np.array([True, False])})

@@ -14,6 +14,8 @@ the last step's info holds ``episode_metrics``.
 
 from __future__ import annotations
 
+import numbers
+
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
@@ -101,11 +103,15 @@ class CrowdVectorEnv(VectorEnv):
             options["reset_mask"], bool)
         if mask.shape != (self.num_envs,):
             raise ValueError(f"options['reset_mask']: expected {self.num_envs} booleans, got shape {mask.shape}")
-        seeds = ([seed + i for i in range(self.num_envs)] if isinstance(seed, int)
+        seeds = ([int(seed) + i for i in range(self.num_envs)] if isinstance(seed, numbers.Integral)
                  else list(seed) if seed is not None else [None] * self.num_envs)
         if len(seeds) != self.num_envs:
             raise ValueError(f"seed: expected an int or {self.num_envs} seeds, got {len(seeds)}")
-        self.episodes.apply_options({k: v for k, v in (options or {}).items() if k != "reset_mask"})
+        changes = {k: v for k, v in (options or {}).items() if k != "reset_mask"}
+        if changes and not mask.all():
+            raise ValueError("options: scenario, people and robot_visible change every sub-environment; "
+                             "expected no reset_mask with them")
+        self.episodes.apply_options(changes)
         for i in np.flatnonzero(mask):
             self._reset_one(int(i), seeds[i])
         self._needs_reset[mask] = False
