@@ -3,8 +3,8 @@ observations, the reward, the ends of episodes and their logs. ``gym.Env`` and t
 shells round one of these (E = 1 and E = n), so their episodes are the same.
 
 Every random draw of world k comes from the generator its environment was reset with (``reset(k, generator)``),
-through child generators spawned from it in a fixed order: the layout and the crowd's random force, the laser's
-noise. Nothing reads a global generator.
+through child generators spawned from it in a fixed order: the layout, the crowd's random force, the laser's
+noise, the tag sensor's. Nothing reads a global generator.
 """
 
 from __future__ import annotations

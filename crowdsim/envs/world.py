@@ -75,13 +75,13 @@ class Worlds:
 
     @property
     def position(self) -> np.ndarray:
-        """[E, N, 2]"""
-        return np.stack([self.z.real, self.z.imag], axis=-1)
+        """[E, N, 2], a view of the state (``position[k]`` costs nothing for the other worlds)."""
+        return _pairs(self.z)
 
     @property
     def velocity(self) -> np.ndarray:
-        """[E, N, 2]"""
-        return np.stack([self.v.real, self.v.imag], axis=-1)
+        """[E, N, 2], a view of the state."""
+        return _pairs(self.v)
 
     def reset(self, k: int, rng: np.random.Generator) -> Layout:
         """Start world k over from a new layout drawn with ``rng``."""
@@ -195,3 +195,8 @@ class Worlds:
         w, h = self.size
         x, y = self.robot_pose[:, 0], self.robot_pose[:, 1]
         return np.minimum(np.minimum(x, w - x), np.minimum(y, h - y)) - self.robot_radius
+
+
+def _pairs(z: np.ndarray) -> np.ndarray:
+    """A contiguous complex array [...] as its (real, imaginary) pairs [..., 2], without a copy."""
+    return z.view(float).reshape(z.shape + (2,))
