@@ -254,8 +254,9 @@ def _crossings(robot_xy, robot_r, people: PersonRows) -> tuple[int, int]:
     frames inside the strip between them), so a robot that wanders inside the strip, following straight behind
     someone say, or walks beside them, crosses nothing however much it jitters. Where the robot crossed the path
     (y = 0) is interpolated between the last frame on the old side and the first on the new: in front if x > 0
-    there. Sides are relative: a person stepping across a still robot crosses it too; one walking past it does not. A side change while the person's heading turned by more than 90 degrees is the person turning, not the
-    robot crossing, and does not count."""
+    there. Sides are relative: a person stepping across a still robot crosses it too; one walking past it does not.
+    A side change while the person's heading turned by more than 90 degrees is the person turning, not the robot
+    crossing, and does not count."""
     if not len(people.frame):
         return 0, 0
     order = np.lexsort((people.frame, people.id))

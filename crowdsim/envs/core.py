@@ -206,7 +206,7 @@ class Episodes:
         before = self.distance.copy()
         self.distance = np.hypot(*(w.goal - w.robot_pose[:, :2]).T)
         collided = gap < 0
-        reached = (self.distance < GOAL_RADIUS) & ~collided if self.config.task == "navigate" else np.zeros(self.n, bool)
+        reached = (self.distance < GOAL_RADIUS) & ~collided & (self.config.task == "navigate")
         terminated = collided | reached
         truncated = ~terminated & (self.elapsed >= self.config.time_limit - 1e-9)
         rewards, terms = self.reward(self, before, gap, reached, collided)
