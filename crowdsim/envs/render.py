@@ -1,5 +1,6 @@
-"""The top-down picture of an episode (``render_mode="rgb_array"``): the room, the persons, the robot with its
-heading, its goal, and, when tracks are observed, the pipeline's tracks; drawn with numpy at ``PIXELS_PER_M``."""
+"""The top-down picture of an episode (``render_mode="rgb_array"``): the room, the persons (the target in orange),
+the robot with its heading, its goal, and, when tracks are observed, the pipeline's tracks as rings; drawn with numpy
+at ``PIXELS_PER_M``."""
 
 from __future__ import annotations
 
@@ -29,7 +30,8 @@ def top_down(episodes, k: int) -> np.ndarray:
             inside &= (u[None, :] - x) ** 2 + (v[:, None] - y) ** 2 >= (r - 1.5 / PIXELS_PER_M) ** 2
         image[inside] = colour
 
-    disc(*w.goal[k], 0.3, GOAL)
+    if episodes.config.task == "navigate":
+        disc(*w.goal[k], 0.3, GOAL)
     for i in range(w.N):
         disc(w.x[k, i], w.y[k, i], w.radius[k, i], TARGET if episodes.config.task == "follow" and i == 0 else PERSON)
     pose = w.robot_pose[k]
