@@ -60,6 +60,7 @@ class Worlds:
         self.t = np.zeros(n_worlds)
         self.size = (0.0, 0.0)
         self._wall_gap, self._facing = np.zeros((4,) + shape), np.zeros((4,) + shape)
+        self._contact_distance = np.zeros((n_worlds, people, people))  # two radii, -inf on the diagonal
 
     # by component, as views (writing to them writes the state)
     x = property(lambda self: self.z.real)
@@ -97,6 +98,9 @@ class Worlds:
         self.route[k], self.route_length[k], self.place[k] = lay.route[..., 0] + 1j * lay.route[..., 1], \
             lay.route_length, 0
         self.goal_z[k] = self.route[k, :, 0]
+        reach = self.radius[k, :, None] + self.radius[k, None, :]
+        np.fill_diagonal(reach, -np.inf)  # no one overlaps themselves
+        self._contact_distance[k] = reach
         self.robot_pose[k], self.robot_velocity[k], self.goal[k], self.t[k] = lay.robot_start, 0.0, lay.robot_goal, 0.0
         return lay
 
@@ -179,13 +183,11 @@ class Worlds:
         the person's repulsion from it to undo)."""
         dz = z[:, None, :] - z[:, :, None]
         d = np.abs(dz)
-        d += forces._far(self.N)
-        push = self.radius[:, :, None] + self.radius[:, None, :] - d
-        if (push > 0).any():
-            np.maximum(push, 0.0, out=push)
-            push *= 0.5
-            push /= d
-            z = z - (push * dz).sum(axis=2)
+        push = self._contact_distance - d
+        overlap = push > 0
+        if overlap.any():
+            push = np.divide(push, d, out=np.zeros_like(push), where=overlap)
+            z = z - 0.5 * (push * dz).sum(axis=2)
         w, h = self.size
         r = self.radius
         return np.minimum(np.maximum(z.real, r), w - r) + 1j * np.minimum(np.maximum(z.imag, r), h - r)

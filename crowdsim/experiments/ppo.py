@@ -79,13 +79,14 @@ def make_vec_env(envs: int, people: int, seed: int):
     return CrowdSB3()
 
 
-def evaluate(policy, episodes: int, people: int, progress: bool = False) -> dict:
+def evaluate(policy, episodes: int, people: int, progress: bool = False, **make) -> dict:
     """Success, collision and timeout rates and the mean return of ``policy(obs) -> action`` (None: uniformly random
-    actions from a fixed generator) over evaluation seeds ``EVAL_SEED ..``."""
+    actions from a fixed generator) over evaluation seeds ``EVAL_SEED ..``; ``make`` keywords go to the
+    environment."""
     import gymnasium as gym
     from tqdm import tqdm
 
-    env = gym.make("crowdsim/Navigate-v0", observation="tracks", people=people)
+    env = gym.make("crowdsim/Navigate-v0", observation="tracks", people=people, **make)
     actions = np.random.default_rng(EVAL_SEED)
     outcomes, returns = [], []
     for e in tqdm(range(episodes), desc="evaluating", unit="episode", disable=not progress):
