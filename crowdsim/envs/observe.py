@@ -87,8 +87,8 @@ class Observer:
             out["laser"] = np.where(np.isfinite(ranges), ranges, self.range_max)
         if "tracks" in self.config.observation:
             out["tracks"], out["tracks_mask"] = self._tracks(episodes)
-        space = self.space.spaces
-        return {name: np.clip(value, space[name].low, space[name].high).astype(np.float32)
+        space = self.space.spaces  # np.minimum/maximum: np.clip's wrapper costs more than the work here
+        return {name: np.minimum(np.maximum(value, space[name].low), space[name].high).astype(np.float32)
                 for name, value in out.items()}
 
     def _tracks(self, episodes) -> tuple[np.ndarray, np.ndarray]:
