@@ -11,9 +11,14 @@ def wrap_angle(a):
 
 
 def compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The pose of frame b (given in frame a) expressed in a's parent frame: a * b."""
-    c, s = np.cos(a[2]), np.sin(a[2])
-    return np.array([a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], float(wrap_angle(a[2] + b[2]))])
+    """The pose of frame b (given in frame a) expressed in a's parent frame: a * b (poses [..., 3])."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
+    out = np.empty(a.shape if a.ndim >= b.ndim else b.shape)  # one pose and many, or as many of each
+    out[..., 0] = a[..., 0] + c * b[..., 0] - s * b[..., 1]
+    out[..., 1] = a[..., 1] + s * b[..., 0] + c * b[..., 1]
+    out[..., 2] = wrap_angle(a[..., 2] + b[..., 2])
+    return out
 
 
 def inverse(a: np.ndarray) -> np.ndarray:
