@@ -10,6 +10,10 @@ import warnings
 from pathlib import Path
 
 
+class UsageError(Exception):
+    """A command-line argument that cannot be used: one line naming it and what was expected."""
+
+
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
     """Warnings as one line naming what they concern (a PedSim file's element and line), not our source line."""
     print(f"crowdsim: warning: {message}", file=sys.stderr if file is None else file)
@@ -174,7 +178,11 @@ def _cmd_bench(args) -> int:
     elif args.what == "env":
         from .bench.env import run_env_benchmark
 
-        run_env_benchmark(json_path=args.json, quick=args.quick)
+        if args.socnavgym and not args.socnavgym_config:
+            raise UsageError("--socnavgym: expected --socnavgym-config too (one of SocNavGym's environment configs)")
+        run_env_benchmark(json_path=args.json, quick=args.quick, crowdnav=args.crowdnav,
+                          crowdnav_dir=args.crowdnav_dir, socnavgym=args.socnavgym,
+                          socnavgym_config=args.socnavgym_config)
     elif args.what == "sensors":
         from .bench.sensors import run_sensor_benchmarks
 
@@ -190,7 +198,7 @@ def _cmd_experiment(args) -> int:
     from .outdir import check_out_dir, write_directory
 
     if args.minutes <= 0:
-        raise ValueError(f"--minutes: expected a time above 0, got {args.minutes}")
+        raise UsageError(f"--minutes: expected a time above 0, got {args.minutes}")
     out = Path(args.out) if args.out else Path("runs") / f"ppo-{time.strftime('%Y%m%d-%H%M%S')}"
     check_out_dir(out)
     from .experiments.ppo import run_ppo
@@ -274,6 +282,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "one env and the vector envs")
     p.add_argument("--json", help="also write the figures to this JSON file")
     p.add_argument("--quick", action="store_true", help="shorter measurements (for a smoke test)")
+    p.add_argument("--crowdnav", metavar="PYTHON", help="bench env: also time CrowdNav with this interpreter")
+    p.add_argument("--crowdnav-dir", metavar="DIR", help="bench env: CrowdNav's checkout, if not installed")
+    p.add_argument("--socnavgym", metavar="PYTHON", help="bench env: also time SocNavGym with this interpreter")
+    p.add_argument("--socnavgym-config", metavar="FILE", help="bench env: the SocNavGym environment config to use")
     p.set_defaults(func=_cmd_bench)
     p = sub.add_parser("experiment", help="experiments that take long: `experiment ppo` trains PPO on Navigate-v0")
     p.add_argument("what", choices=("ppo",), help="ppo: stable-baselines3 PPO on crowdsim/Navigate-v0 with the "
@@ -299,7 +311,7 @@ def main(argv: list[str] | None = None) -> int:
         warnings.showwarning = _show_warning
         try:
             return args.func(args)
-        except (ScenarioError, RunDirError, EvaluationInputError) as e:
+        except (ScenarioError, RunDirError, EvaluationInputError, UsageError) as e:
             print(f"crowdsim: error: {e}", file=sys.stderr)
             return 2
 

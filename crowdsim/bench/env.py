@@ -11,13 +11,20 @@ of all its sub-environments.
 * gymnasium's ``SyncVectorEnv`` of the same 64 single environments, for comparison: the same episodes, one after
   another in Python.
 
-For reference, the issue quotes CrowdNav at 470 steps/s with 20 humans and one crowd update per 0.25 s step, and
-SocNavGym at 80, on this kind of machine; neither is installed here, so those two are quoted, not measured.
+Side by side, when their interpreters are given (``peer_envs.py`` says how each is configured and timed): CrowdNav
+(``--crowdnav PYTHON``, with ``--crowdnav-dir`` its checkout if not installed there) and SocNavGym (``--socnavgym
+PYTHON --socnavgym-config`` one of its environment configs), each with 20 humans and random actions, timed the
+same way in a subprocess of its own interpreter. Their steps are longer than ours (0.25 s and 1 s against 0.2 s),
+so simulated seconds per wall second are printed too.
 """
 
 from __future__ import annotations
 
+import json
+import os
 import platform
+import subprocess
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -58,23 +65,50 @@ def _vector(mode: str, quick: bool) -> float:
     return steps * VECTOR_ENVS
 
 
-def run_env_benchmark(json_path: str | None = None, quick: bool = False) -> dict:
+def _peer(name: str, python: str, extra: list[str], path: str | None) -> dict:
+    """The peer's figures from ``peer_envs.py`` run by its own interpreter."""
+    env = dict(os.environ)
+    if path:
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (path, env.get("PYTHONPATH")) if p)
+    script = Path(__file__).with_name("peer_envs.py")
+    done = subprocess.run([python, str(script), name, "--humans", str(PEOPLE), *extra], capture_output=True,
+                          text=True, env=env)
+    if done.returncode:
+        raise RuntimeError(f"{name} benchmark with {python} failed:\n{done.stderr[-2000:]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def run_env_benchmark(json_path: str | None = None, quick: bool = False, crowdnav: str | None = None,
+                      crowdnav_dir: str | None = None, socnavgym: str | None = None,
+                      socnavgym_config: str | None = None) -> dict:
     figures = {}
 
-    def show(key, value, what):
+    def show(key, value, what, step_s=None):
         figures[key] = value
-        print(f"{what:66s} {value:10,.0f} steps/s", flush=True)
+        sim = f"  ({value * step_s:,.0f} sim s/s)" if step_s else ""
+        print(f"{what:66s} {value:10,.0f} steps/s{sim}", flush=True)
 
     print(f"crowdsim bench env on {platform.processor() or platform.machine()}, Python {platform.python_version()}"
           f"{' (quick)' if quick else ''}: Navigate-v0, passers_by, 0.2 s control, random actions")
     for observation in ("truth", "laser", "tracks"):
-        show(f"single_{observation}", _single(observation, quick), f"one env, {PEOPLE} people, {observation}")
+        show(f"single_{observation}", _single(observation, quick), f"one env, {PEOPLE} people, {observation}", 0.2)
     show("vector_native_truth", _vector("vector_entry_point", quick),
          f"native vector env, {VECTOR_ENVS} envs x {VECTOR_PEOPLE} people, truth (all envs' steps)")
     show("vector_sync_truth", _vector("sync", quick),
          f"gymnasium SyncVectorEnv, {VECTOR_ENVS} envs x {VECTOR_PEOPLE} people, truth")
     figures["native_over_single"] = figures["vector_native_truth"] / figures["single_truth"]
-    print(f"native vector env over one env: {figures['native_over_single']:.1f}x; for reference (quoted, not "
-          "measured here): CrowdNav 470 steps/s with 20 humans, SocNavGym 80")
+    print(f"native vector env over one env: {figures['native_over_single']:.1f}x")
+    peers = []
+    if crowdnav:
+        peers.append(("crowdnav", crowdnav, [], crowdnav_dir, "CrowdNav CrowdSim-v0"))
+    if socnavgym:
+        peers.append(("socnavgym", socnavgym, ["--config", socnavgym_config], None, "SocNavGym-v1"))
+    for name, python, extra, path, label in peers:
+        peer = _peer(name, python, extra, path)
+        figures[name] = peer
+        c = peer["config"]
+        show(f"{name}_steps_per_s", peer["steps_per_s"], f"{label}, {c['humans']} humans, {c['time_step']} s steps",
+             c["time_step"])
+        print(f"{'':66s} {peer['steps_per_s_without_reset']:10,.0f} steps/s without the time in reset()")
     write_figures(json_path, figures)
     return figures
