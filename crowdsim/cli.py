@@ -1,4 +1,4 @@
-"""The ``crowdsim`` command: run, evaluate, evaluate-nav, report, scenarios, validate-scenario, validate,
+"""The ``crowdsim`` command: run, evaluate, evaluate-nav, navigate, report, scenarios, validate-scenario, validate,
 scenario-keys, bench."""
 
 from __future__ import annotations
@@ -23,13 +23,18 @@ def _cmd_run(args) -> int:
     from scenarios import load_scenario
 
     from .outdir import check_out_dir
-    from .run import cameras_line, run, summary_table
+    from .run import cameras_line, navigation_tables, run, summary_table
 
     scenario = load_scenario(args.scenario, seed=args.seed, duration=args.duration)
     out = Path(args.out) if args.out else Path("runs") / f"{scenario['name']}-{time.strftime('%Y%m%d-%H%M%S')}"
     check_out_dir(out)
     metrics = run(scenario, out, rrd=args.rrd, progress=not args.quiet)
     print(summary_table(metrics))
+    if "navigation" in metrics:
+        print(f"\nnavigation ({'goal' if scenario['robot']['driver'] == 'goals' else 'following'}, "
+              f"{metrics['duration_s']:.1f} s recorded):\n")
+        print(navigation_tables(metrics["navigation"]))
+        print()
     gt = metrics["groundtruth"]
     print(f"persons within range: {gt['mean_persons_in_range']:.1f} mean, {gt['max_persons_in_range']} max; "
           f"results in {out}/")
@@ -94,6 +99,17 @@ def _cmd_evaluate_nav(args) -> int:
     from evaluation.navigation_report import evaluate_nav_main
 
     print(evaluate_nav_main([Path(d) for d in args.run_dirs], Path(args.json) if args.json else None))
+    return 0
+
+
+def _cmd_navigate(args) -> int:
+    from scenarios import load_scenario
+
+    from .navigate import navigate_main
+
+    scenario = load_scenario(args.scenario)
+    print(navigate_main(scenario, args.planner, args.first_seed, args.seeds, args.duration,
+                        Path(args.json) if args.json else None, workers=args.workers, progress=not args.quiet))
     return 0
 
 
@@ -256,6 +272,21 @@ def build_parser() -> argparse.ArgumentParser:
                         "following task): layouts in docs/navigation-metrics.md")
     p.add_argument("--json", help="also write {\"runs\": [...], \"mean\": ..., \"sd\": ...} to this new file")
     p.set_defaults(func=_cmd_evaluate_nav)
+    p = sub.add_parser("navigate", help="a planner over a fixed suite of seeds of a navigation scenario (driver "
+                                        "goals or follow), scored in memory: the navigation metrics' mean and sd")
+    p.add_argument("scenario", help="a bundled scenario name or a YAML file whose robot.driver is goals or follow")
+    p.add_argument("--planner", required=True,
+                   help="zone, nd, straight, social_force or module.path:ClassName (the scenario's own parameters "
+                        "when it names that type, else the type's defaults)")
+    p.add_argument("--seeds", type=int, required=True, help="episodes: seeds S..S+N-1")
+    p.add_argument("--first-seed", type=int, default=1, help="S, the suite's first seed (default 1)")
+    p.add_argument("--duration", type=float, help="each episode's time limit in s (default: the scenario's duration)")
+    p.add_argument("--workers", type=int, default=1, help="processes the seeds are shared among (default 1; 2 on "
+                                                          "two cores)")
+    p.add_argument("--json", help="also write every episode's figures, their mean and sd and the counts to this "
+                                  "new file")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_navigate)
     p = sub.add_parser("report", help="report.md with the metric tables and figures of a run directory")
     p.add_argument("run_dir", help="a directory `crowdsim run` wrote")
     p.add_argument("--out", help="where to write it (default RUN_DIR/report); must be new or empty")

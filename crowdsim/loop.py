@@ -1,8 +1,16 @@
 """The one place that wires a scenario, the crowd, the robot, the sensors, the pipeline and the evaluation together.
 
 ``Simulation.frames`` yields one ``Frame`` per tracking cycle; whoever consumes it (the run command, a test, a
-dataset writer) decides what to keep. ``Simulation.step(command)`` advances one tick, the robot driven by its route
-driver or by a caller's (v, omega) (a gym environment, a planner). The pipeline's parts are the scenario's
+dataset writer) decides what to keep. ``Simulation.step(command)`` advances one tick, the robot driven by the
+scenario's driver (``robot.driver``: its route; a planner to its goals; a planner following a person) or by a
+caller's (v, omega) (a gym environment, a planner of one's own).
+
+The goals and follow drivers run the robot's navigation (pipeline/navigation) at every tracking cycle on what the
+robot has: its odometry pose and last executed (v, omega), the laser returns and the tracks in odom, the goal brought
+into odom through the robot's localisation in the map (the true world_T_odom, as the route driver steers by), and
+for following the tag reading; the command is held until the next cycle. The loop records, every tick, whether the
+robot's disc overlaps a person's or a wall (``Simulation.collision_ticks``), and whether the last goal is reached
+(``Simulation.finished``: ``frames`` ends there). The pipeline's parts are the scenario's
 (``pipeline.assemble``); the loop only calls them. Every random draw comes from streams spawned from the scenario
 seed, one per component, so adding a sensor does not change the crowd.
 """
@@ -19,14 +27,17 @@ from evaluation.occlusion import seed000_visible
 from pipeline.assemble import build_pipeline
 from pipeline.fusion import to_frame
 from pipeline.frames import inverse, transform_points
-from pipeline.types import (CameraFrame, DepthFrame, DetectedPersons, GroundTruthTags, LaserScan, TrackedPersons,
-                            Visibility)
-from scenarios.geometry import wall_segments
+from pipeline.navigation.follow import PersonFollower
+from pipeline.navigation.planners import build_planner
+from pipeline.types import (CameraFrame, DepthFrame, DetectedPersons, GroundTruthTags, LaserScan, TagReading,
+                            TrackedPersons, Visibility)
+from scenarios.geometry import closest_on_segments, wall_segments
 from sensors import Laser, Scene, parts_at
 from sensors.body import body_scale
 from sensors.laser import LaserArray
 from sensors.camera import DepthCamera, WallCamera, camera_pose
 from sensors.scene import PARTS
+from sensors.tag import TagSensor
 
 from .crowd import AgentStates, Crowd
 from .robot import Robot
@@ -55,6 +66,16 @@ class Frame:
     visibility: Visibility  # who each sensor saw, every person alive
     depth_frames: list[DepthFrame]  # images taken since the previous Frame
     camera_frames: list[CameraFrame]
+    # navigation (goals and follow drivers): the goal driven to (world; None once the last is reached, and when
+    # following), the followed person's crowd id (-1: none yet or gone), the follower's track of them (-1: none),
+    # whether a robot sensor (laser, depth camera) saw them, the tag reading of this cycle (None: none due, or missed),
+    # and whether the robot's disc overlapped a person's or a wall at any tick since the previous Frame
+    goal: np.ndarray | None = None
+    target_id: int = -1
+    target_track: int = -1
+    target_visible: bool = False
+    tag: TagReading | None = None
+    collision: bool = False
 
 
 @dataclass
@@ -87,6 +108,12 @@ class Simulation:
         self.dt = scenario["dt"]
         # the parts are made once (a user's may be costly to make) and start over at every reset
         self.pipeline = build_pipeline(scenario["pipeline"], [laser["name"] for laser in sensors["lasers"]])
+        robot = scenario["robot"]
+        self.driver = robot["driver"]
+        self.goals = np.asarray(robot["goals"] or np.zeros((0, 2)), float).reshape(-1, 2)
+        self.planner = build_planner(robot["planner"], robot) if self.driver != "route" else None
+        self.follower = (PersonFollower(self.planner, tuple(robot["follow"]["band"])) if self.driver == "follow"
+                         else None)
         self.reset()
 
     def reset(self, seed: int | None = None) -> None:
@@ -96,7 +123,8 @@ class Simulation:
         scenario = self.scenario
         self.seed = scenario["seed"] if seed is None else int(seed)
         n_lasers = len(scenario["sensors"]["lasers"])
-        streams = np.random.SeedSequence(self.seed).spawn(3 + n_lasers + len(self.depth_cameras))
+        # the tag reader's stream comes last: the others are what they were before it existed
+        streams = np.random.SeedSequence(self.seed).spawn(3 + n_lasers + len(self.depth_cameras) + 1)
         rngs = [np.random.default_rng(s) for s in streams]
         for k, camera in enumerate(self.depth_cameras):
             camera.rng = rngs[3 + n_lasers + k]
@@ -120,6 +148,18 @@ class Simulation:
         # sensor -> its latest detections since the last tracking cycle, in the tracking frame
         self._pending: dict[str, DetectedPersons] = {}
         self._frame = 0
+        # navigation
+        if self.planner is not None:
+            (self.follower or self.planner).reset()
+        self.tag = TagSensor(scenario["sensors"]["tag"], rngs[-1]) if self.driver == "follow" else None
+        self.goal_index = 0  # the goal driven to (goals driver)
+        self.finished = False  # the last goal reached (goals driver)
+        self.target_id = -1  # the followed person's crowd id, once placed
+        self._target_placed = False
+        self._nav_command = (0.0, 0.0)  # held between tracking cycles
+        self.collision_ticks = 0  # ticks the robot's disc overlapped a person's or a wall
+        self.first_collision: float | None = None  # the stamp of the first
+        self._collided = False  # since the previous Frame
 
     def warm_up(self) -> None:
         """Crowd-only simulation for the scenario's warm-up, with the robot standing at its start."""
@@ -180,9 +220,17 @@ class Simulation:
         responsibility, and nothing stops it.
         """
         t0 = time.perf_counter()
-        v, omega = self.robot.drive_command(self._front_clearance()) if command is None else _command(command)
+        if command is not None:
+            v, omega = _command(command)
+        elif self.driver == "route":
+            v, omega = self.robot.drive_command(self._front_clearance())
+        else:
+            v, omega = self._nav_command
+        if self.driver == "follow" and not self._target_placed:
+            self._place_target()
         self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p["radius"])
         self.robot.step(v, omega, self.dt)
+        self._check_collision()
         t1 = time.perf_counter()
         self.timing.crowd_s += t1 - t0
         stamp = self.crowd.t
@@ -225,11 +273,72 @@ class Simulation:
         tags = self._tags(agents, near, scans, visibility)
         score = self.clearmot.update(gt.track_id, gt.position, tracks.track_id, tracks.position, tags.ignore)
         frame = Frame(self._frame, stamp, self.robot.pose.copy(), self.robot.world_T_odom, agents, scans,
-                      detections, tracks, gt, tags, score, visibility, self._pending_depth, self._pending_camera)
-        self._pending_depth, self._pending_camera = [], []
+                      detections, tracks, gt, tags, score, visibility, self._pending_depth, self._pending_camera,
+                      collision=self._collided)
+        if self.planner is not None:
+            self._navigate(frame)
+        self._pending_depth, self._pending_camera, self._collided = [], [], False
         self._frame += 1
         self.timing.wall_s += time.perf_counter() - t0
         return frame
+
+    def _place_target(self) -> None:
+        """The person to follow joins the crowd at its start, on its route, at its speed (when recording starts)."""
+        target = self.scenario["robot"]["follow"]["target"]
+        self.target_id = int(self.crowd.add_walkers(np.array([target["start"]], float), target["route"],
+                                                    target["speed"], agent_type=target["agent_type"])[0])
+        self._target_placed = True
+
+    def _check_collision(self) -> None:
+        """Whether the robot's disc overlaps a person's or a wall now (the navigation metrics' collision test)."""
+        xy, radius = self.robot.pose[:2], self.robot.p["radius"]
+        gap = np.inf
+        if len(self.crowd.pos):
+            gap = float((np.hypot(*(self.crowd.pos - xy).T) - self.crowd.radius).min()) - radius
+        if len(self.walls):
+            gap = min(gap, float(closest_on_segments(xy[None], self.walls)[1].min()) - radius)
+        if gap < 0:
+            self.collision_ticks += 1
+            self._collided = True
+            if self.first_collision is None:
+                self.first_collision = self.crowd.t
+
+    def _navigate(self, frame: Frame) -> None:
+        """The goals or follow driver at a tracking cycle: the command held until the next, from what the robot has
+        (odometry pose and velocity, laser returns and tracks in odom, the goal through the localisation, the tag);
+        what it decided goes into ``frame``."""
+        robot = self.robot
+        obstacles = [transform_points(self._lasers_by_name[name].pose_in(robot.odom_pose), scan.points())
+                     for name, scan in self._latest_scan.items()]
+        obstacles = np.concatenate(obstacles) if obstacles else np.zeros((0, 2))
+        if self.driver == "goals":
+            radius = self.scenario["robot"]["goal_radius"]
+            while (self.goal_index < len(self.goals)
+                   and np.hypot(*(self.goals[self.goal_index] - robot.pose[:2])) <= radius):
+                self.goal_index += 1
+            if self.goal_index >= len(self.goals):
+                self.finished = True
+                self._nav_command = (0.0, 0.0)
+                return
+            goal = self.goals[self.goal_index]
+            frame.goal = goal.copy()
+            in_odom = transform_points(inverse(robot.world_T_odom), goal[None])[0]
+            command = self.planner.command(frame.stamp, robot.odom_pose.copy(), robot.velocity.copy(), obstacles,
+                                           frame.tracks, in_odom)
+        else:
+            agents = frame.agents
+            row = np.searchsorted(agents.id, self.target_id)
+            alive = row < len(agents.id) and agents.id[row] == self.target_id
+            frame.target_id = self.target_id if alive else -1
+            frame.tag = self.tag.read(frame.stamp, robot.pose, agents.position[row] if alive else None)
+            command = self.follower.command(frame.stamp, robot.odom_pose.copy(), robot.velocity.copy(), obstacles,
+                                            frame.tracks, frame.tag)
+            frame.target_track = int(self.follower.target_track)
+            if alive:  # a robot's own sensor (a laser, a depth camera) saw the person in its latest frame
+                v = frame.visibility
+                own = [k for k, name in enumerate(v.sensors) if name not in {c.name for c in self.wall_cameras}]
+                frame.target_visible = bool((v.amount[row, own] > 0).any())
+        self._nav_command = (float(command[0]), float(command[1]))
 
     def _detect(self, data: LaserScan | DepthFrame | CameraFrame) -> None:
         """The sensor's detector, if it has one, on a frame the sensor made: its detections, brought into the
@@ -307,12 +416,15 @@ class Simulation:
         return ahead & (uv >= 0).all(axis=1) & (uv[:, 0] < size.width) & (uv[:, 1] < size.height)
 
     def frames(self, duration: float):
-        """Yield the Frames of ``duration`` seconds of simulated time (after the warm-up)."""
+        """Yield the Frames of ``duration`` seconds of simulated time (after the warm-up), or until the goals driver
+        has reached its last goal (the Frame where it did is the last)."""
         steps = int(round(duration / self.dt))
         for _ in range(steps):
             frame = self.step()
             if frame is not None:
                 yield frame
+                if self.finished:
+                    return
 
 
 def _command(command) -> tuple[float, float]:

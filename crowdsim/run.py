@@ -4,6 +4,11 @@ Outputs are written into a temporary directory moved into place only when comple
 interrupted or failed run leaves nothing half-written, and an existing non-empty directory is never touched. The
 run's memory does not grow with its length: its CSVs stream to disk as the frames come, they are scored from disk in
 chunks (evaluation/score.py), and the top-down picture keeps at most ``PICTURE_SECONDS`` worth of cycles.
+
+A scenario whose robot drives to goals or follows a person (``robot.driver``) also writes what the navigation
+metrics need (docs/navigation-metrics.md): persons.csv, navigation.json and, for following, following.csv, streamed
+like the other CSVs; the run ends at the last goal, and its navigation metrics, scored from those files as
+``crowdsim evaluate-nav`` scores them, join metrics.json.
 """
 
 from __future__ import annotations
@@ -18,6 +23,8 @@ import yaml
 from tqdm import tqdm
 
 from evaluation.heap import release_memory
+from evaluation.navigation import navigation_metrics, read_nav_run
+from evaluation.navigation_report import json_safe
 from evaluation.score import score_tracking, tracking_table
 from evaluation.stream import CsvPair
 from pipeline.frames import compose, inverse
@@ -39,6 +46,10 @@ ROBOT_HEADER = "frame,t,x,y,yaw,odom_x,odom_y,odom_yaw"
 # t is the sensor frame's own time, frame the tracking cycle that delivered it
 VISIBILITY_HEADER = "frame,t,id,sensor,amount,in_view,occluded"
 VISIBILITY_FORMAT = ["%d", "%.2f", "%d", "%s", "%.4g", "%d", "%d"]
+# navigation (goals and follow drivers): every person alive per tracking cycle, world frame, with their disc radius;
+# for following, the follower's track of the target (-1: none) and whether a robot sensor saw the target
+PERSONS_HEADER = "frame,t,id,x,y,vx,vy,radius"
+FOLLOWING_HEADER = "frame,t,target_track,target_visible"
 CROWD_EVERY = 5  # tracking cycles between the crowd snapshots drawn in the top-down picture
 # the top-down picture draws every cycle of a run this long or shorter, and every k-th cycle of a run k times as
 # long, so it holds at most this much of the run
@@ -52,7 +63,7 @@ def _rows(frame_index: int, stamp: float, persons) -> np.ndarray:
                             persons.velocity])
 
 
-INTEGER_COLUMNS = {"id", "in_range", "beams", "visible", "visible_seed000"}
+INTEGER_COLUMNS = {"id", "in_range", "beams", "visible", "visible_seed000", "target_track", "target_visible"}
 
 
 def _without_unset(value):
@@ -73,6 +84,24 @@ def _detection_rows(frame) -> np.ndarray:
 def _robot_row(frame) -> np.ndarray:
     odom_pose = compose(inverse(frame.world_T_odom), frame.robot_pose)
     return np.array([[frame.index, frame.stamp, *frame.robot_pose, *odom_pose]])
+
+
+def _person_rows(frame) -> np.ndarray:
+    a = frame.agents
+    n = len(a.id)
+    return np.column_stack([np.full(n, frame.index), np.full(n, frame.stamp), a.id, a.position, a.velocity,
+                            a.radius])
+
+
+def navigation_spec(scenario: dict, target_id: int) -> dict:
+    """navigation.json's content (docs/navigation-metrics.md): the task of the scenario's driver, the time limit
+    (the scenario's duration), the robot's radius and the walls. A goals driver's task is its last goal."""
+    robot = scenario["robot"]
+    spec = {"robot_radius": robot["radius"], "time_limit": scenario["duration"],
+            "walls": wall_segments(scenario).reshape(-1, 4).tolist()}
+    if robot["driver"] == "goals":
+        return {"task": "goal", "goal": list(robot["goals"][-1]), "goal_radius": robot["goal_radius"], **spec}
+    return {"task": "follow", "target_id": int(target_id), "band": list(robot["follow"]["band"]), **spec}
 
 
 def _gt_rows(frame) -> np.ndarray:
@@ -163,6 +192,19 @@ def _world_rows(index: int, persons, world_T_odom: np.ndarray) -> np.ndarray:
                             w[1] + s * x + c * y])
 
 
+def navigation_tables(figures: dict) -> str:
+    """One run's navigation metrics as the two tables of ``crowdsim evaluate-nav``."""
+    from evaluation.navigation_report import OUTCOME_COLUMNS, SOCIAL_COLUMNS, nav_table
+
+    return "\n\n".join(_one_row(nav_table(["this run"], [figures], columns)) for columns in (OUTCOME_COLUMNS,
+                                                                                            SOCIAL_COLUMNS))
+
+
+def _one_row(table: str) -> str:
+    """The table without its mean and sd rows (one run: its own figures)."""
+    return "\n".join(table.splitlines()[:3])
+
+
 def summary_table(metrics: dict) -> str:
     tm = metrics["timing"]
     return tracking_table(metrics["tracking"], {"tracker Hz": f"{tm['tracker_hz']:.0f}",
@@ -200,6 +242,11 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
            "detections": CsvWriter(tmp / "detections.csv", DETECTIONS_HEADER),
            "robot": CsvWriter(tmp / "robot.csv", ROBOT_HEADER),
            "visibility": CsvWriter(tmp / "visibility.csv", VISIBILITY_HEADER, VISIBILITY_FORMAT, {3: sensors})}
+    navigating = sim.driver != "route"
+    if navigating:
+        csv["persons"] = CsvWriter(tmp / "persons.csv", PERSONS_HEADER)
+    if sim.driver == "follow":
+        csv["following"] = CsvWriter(tmp / "following.csv", FOLLOWING_HEADER)
     duration = scenario["duration"]
     picture = Picture(max(1, math.ceil(duration / PICTURE_SECONDS - 1e-9)))
     written: dict[str, float] = {}
@@ -215,6 +262,11 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
             csv["robot"].write(_robot_row(frame))
             for rows in _visibility_rows(frame, written):
                 csv["visibility"].write(rows)
+            if navigating:
+                csv["persons"].write(_person_rows(frame))
+            if sim.driver == "follow":
+                csv["following"].write(np.array([[frame.index, frame.stamp, frame.target_track,
+                                                  frame.target_visible]]))
             in_range = int(frame.gt_tags.in_range.sum())
             frames, persons, most = frames + 1, persons + in_range, max(most, in_range)
             picture.add(frame)
@@ -229,6 +281,10 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     if recording:
         recording.close()
     timing = sim.timing
+    if navigating:
+        # the time recorded: the run ends early at the last goal
+        duration = sim.crowd.t - t0
+        (tmp / "navigation.json").write_text(json.dumps(navigation_spec(scenario, sim.target_id), indent=1) + "\n")
     cameras = {camera.name: camera.backend for camera in (*sim.depth_cameras, *sim.wall_cameras)}
     # the scenario as run, every default filled in: a scenario file that runs again as it is
     resolved = _without_unset({key: value for key, value in scenario.items() if key != "source"})
@@ -244,6 +300,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     from .plot import plot_run  # matplotlib, imported once the scoring is done: 20 MB less at its peak
 
     plot_run(tmp / "topdown.png", wall_segments(scenario), picture, f"{scenario['name']}, seed {scenario['seed']}")
+    navigation = navigation_metrics(read_nav_run(tmp)) if navigating else None
     metrics = {
         "scenario": scenario["name"],
         "seed": scenario["seed"],
@@ -263,8 +320,13 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
             "warmup_wall_s": warmup_s,
         },
     }
+    if navigation is not None:
+        metrics["navigation"] = json_safe(navigation)  # JSON has no NaN or inf: null (for min TTC, inf)
     (tmp / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
     table = summary_table(metrics)
+    if navigation is not None:
+        table += "\n\n" + navigation_tables(navigation)
+        metrics["navigation"] = navigation  # the caller gets the figures, NaN and inf as they are
     (tmp / "summary.md").write_text(
         f"# {scenario['name']} (seed {scenario['seed']}, {duration:g} s)\n\n{table}\n\n"
         f"Persons within {scenario['evaluation']['max_range']:g} m of the robot: "

@@ -62,7 +62,8 @@ def nav_table(names: list[str], runs: list[dict], columns) -> str:
     return "\n".join(lines)
 
 
-def _json_safe(figures: dict) -> dict:
+def json_safe(figures: dict) -> dict:
+    """The figures with NaN and inf as None (JSON's null)."""
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in figures.items()}
 
 
@@ -78,8 +79,8 @@ def evaluate_nav_main(run_dirs: list[Path], json_path: Path | None) -> str:
     names = [Path(d).name or str(d) for d in run_dirs]
     if json_path is not None:
         mean, sd = mean_sd(runs)
-        Path(json_path).write_text(json.dumps({"runs": [{"run_dir": str(d), **_json_safe(r)}
+        Path(json_path).write_text(json.dumps({"runs": [{"run_dir": str(d), **json_safe(r)}
                                                         for d, r in zip(run_dirs, runs)],
-                                               "mean": _json_safe(mean), "sd": _json_safe(sd)}, indent=2) + "\n")
+                                               "mean": json_safe(mean), "sd": json_safe(sd)}, indent=2) + "\n")
     return "\n".join([f"{len(runs)} run(s): outcome, path and smoothness", "", nav_table(names, runs, OUTCOME_COLUMNS),
                       "", "social, passers-by and following", "", nav_table(names, runs, SOCIAL_COLUMNS)])

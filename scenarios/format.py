@@ -130,6 +130,94 @@ ODOMETRY = Schema({
                                 doc="rad/sqrt(m): heading error variance per metre driven"),
 })
 
+# The robot's local planners (pipeline/navigation/planners.py builds them; a test keeps these defaults equal to the
+# classes'). A built-in planner also gets the robot's radius, max_speed, max_angular_speed and max_acceleration.
+PLANNER_COMMON = {
+    "goal_tolerance": F("float", 0.1, min=0.0,
+                        doc="m, the planner stops this near its goal (well inside the follower's band; an assumption)"),
+}
+ND_PLANNER = {
+    **PLANNER_COMMON,
+    "security_distance": F("float", 0.5, min=0.0, exclusive_min=True,
+                           doc="m, ds: obstacles nearer the robot's edge are dangerous (Player's nd driver, avoid_dist)"),
+    "sectors": F("int", 180, min=8, doc="sectors of the nearness diagram, a multiple of 4 (Minguez's SECTORES)"),
+    "wide_fraction": F("float", 0.25, min=0.0, exclusive_min=True, max=1.0,
+                       doc="a region wider than this share of the sectors is wide (Minguez & Montano 2004)"),
+}
+PLANNER_TYPES = {
+    "zone": Schema({
+        **ND_PLANNER,
+        "zone_radius": F("float", 0.5, min=0.0, exclusive_min=True,
+                         doc="m, r: the disc round each tracked person (seed 001 Fig. 11)"),
+        "zone_reach": F("float", 1.5, min=0.0, exclusive_min=True,
+                        doc="m, R: the sector ahead of a walking person (seed 001 Fig. 11)"),
+        "zone_opening_deg": F("float", 30.0, min=0.0, exclusive_min=True, max=180.0,
+                              doc="deg, omega: the sector's full opening (seed 001 Fig. 11; "
+                                  "pipeline/navigation/zones.py says why full)"),
+        "standing_speed": F("float", 0.25, min=0.0,
+                            doc="m/s, slower tracks get the disc alone (above the tracker's speed for a person "
+                                "standing still; pipeline/navigation/zones.py)"),
+        "zone_rays": F("int", 360, min=8, doc="rays that read the zones as a scan (two per ND sector)"),
+        "zone_security_distance": F("float", 0.2, min=0.0, exclusive_min=True,
+                                    doc="m, ND's security distance for the zones (a zone is a margin already; "
+                                        "pipeline/navigation/planners.py says why 0.2)"),
+        "yield_time": F("float", 2.0, min=0.0,
+                        doc="s, give way to a passer-by crossing the robot's course ahead within this time (0: "
+                            "never; an addition to seed 001, pipeline/navigation/planners.py)"),
+    }),
+    "nd": Schema(ND_PLANNER),
+    "straight": Schema({
+        **PLANNER_COMMON,
+        "safety_distance": F("float", 0.6, min=0.0, doc="m, stop for a laser return this near ahead (robot.safety_distance)"),
+        "heading_gain": F("float", 2.0, min=0.0, doc="1/s, omega = gain x heading error (the route driver's)"),
+        "drive_cone_deg": F("float", 60.0, min=0.0, max=180.0,
+                            doc="deg, drive only with the goal this near the heading (the route driver's)"),
+        "corridor_margin": F("float", 0.1, min=0.0, doc="m, the path checked is the robot's width plus this each side"),
+    }),
+    "social_force": Schema({
+        **PLANNER_COMMON,
+        "relaxation_time": F("float", 0.5, min=0.0, doc="s, tau (Helbing & Molnar 1995)"),
+        "person_strength": F("float", 2.1, min=0.0, doc="m^2/s^2, V0 of the pedestrian potential (HM 1995)"),
+        "person_range": F("float", 0.3, min=0.0, exclusive_min=True, doc="m, sigma of that potential (HM 1995)"),
+        "obstacle_strength": F("float", 10.0, min=0.0, doc="m^2/s^2, U0 of the wall potential (HM 1995)"),
+        "obstacle_range": F("float", 0.2, min=0.0, exclusive_min=True, doc="m, R of the wall potential (HM 1995)"),
+        "fov_deg": F("float", 200.0, min=0.0, max=360.0, doc="deg, 2 phi, the field of view (HM 1995)"),
+        "out_of_view_weight": F("float", 0.5, min=0.0, max=1.0, doc="c, weight of what is out of view (HM 1995)"),
+        "obstacle_sectors": F("int", 36, min=1, doc="laser returns count once per sector (an assumption)"),
+        "person_radius": F("float", 0.4, min=0.0,
+                           doc="m, laser returns this near a track are that person's (body 0.25 m plus track "
+                               "error; an assumption)"),
+    }),
+}
+# a class of one's own: made as Class(**keys), with command(stamp, pose, velocity, obstacles, tracks, goal) and reset()
+PLANNER = Typed(PLANNER_TYPES, "zone", "planner", ("command", "reset"))
+
+FOLLOW_TARGET = Schema({
+    "start": F("point", required=True, doc="m, world: where the target appears when recording starts (after the warm-up)"),
+    "route": F("str", required=True, doc="the route (a name under `routes`) the target walks; with sink: false, round "
+                                          "and round"),
+    "speed": F("float", required=True, min=0.0, exclusive_min=True,
+               doc="m/s, the target's desired speed; below robot.max_speed, or the robot could not keep up"),
+    "agent_type": F("str", "adult", doc="the target's agent type (its size)"),
+})
+
+FOLLOW = Schema({
+    "band": F("point", [1.0, 2.0], doc="m, [near, far]: the robot keeps the target's centre this far away "
+                                       "(pipeline/navigation/follow.py)"),
+    "target": F(FOLLOW_TARGET, optional=True, doc="the person the robot follows, who wears the tag (required)"),
+})
+
+# seed 001 Sec. 3.2: the RFID reader's coverage; the errors, detection rate and read rate are assumptions
+# (sensors/tag.py says why); a test keeps these equal to sensors.tag.TAG_DEFAULTS
+TAG = Schema({
+    "rate": F("float", 5.0, min=0.0, exclusive_min=True, doc="Hz, readings per second (an assumption)"),
+    "range_min": F("float", 0.5, min=0.0, doc="m, nearest tag read (seed 001 Sec. 3.2)"),
+    "range_max": F("float", 4.5, min=0.0, exclusive_min=True, doc="m, farthest tag read (seed 001 Sec. 3.2)"),
+    "range_sd": F("float", 0.5, min=0.0, doc="m, range error sd (an assumption: coarse)"),
+    "bearing_sd_deg": F("float", 20.0, min=0.0, doc="deg, bearing error sd (an assumption: one antenna lobe)"),
+    "detection_probability": F("float", 0.9, min=0.0, max=1.0, doc="chance a due reading is had (an assumption)"),
+})
+
 ROBOT = Schema({
     "start": F("pose", required=True, doc="m, m, rad: initial pose in the world frame"),
     "route": F("points", None, doc="m, waypoints the robot drives through"),
@@ -141,6 +229,17 @@ ROBOT = Schema({
     "max_angular_acceleration": F("float", 1.5, min=0.0, exclusive_min=True, doc="rad/s^2 (an assumption)"),
     "safety_distance": F("float", 0.6, min=0.0, doc="m, stop when a laser return is this close in front"),
     "odometry": F(ODOMETRY, doc="wheel odometry's systematic and random errors (all 0: perfect odometry)"),
+    "driver": F("str", "route", choices=("route", "goals", "follow"),
+                doc="what drives the robot: route (its route, stopping for what is in front), goals (the planner to "
+                    "each of `goals` in turn; the run ends at the last), follow (the planner after `follow.target`)"),
+    "goals": F(ListOf(F("point"), min_items=1), None, doc="m, world: the goals the goals driver visits in order"),
+    "goal_radius": F("float", 0.3, min=0.0, exclusive_min=True,
+                     doc="m, a goal is reached with the robot's centre this near (CrowdNav: the robot radius, 0.3 m)"),
+    "planner": F(PLANNER, doc="the local planner of the goals and follow drivers (zone: seed 001 Sec. 7); a built-in "
+                              "type gets the robot's radius, speed limits and max_acceleration besides its keys, a "
+                              "class of your own is made as Class(**keys) and needs command(stamp, pose, velocity, "
+                              "obstacles, tracks, goal) -> (v, omega) and reset() (pipeline/navigation/planners.py)"),
+    "follow": F(FOLLOW, optional=True, doc="the follow driver's target and band (required with driver: follow)"),
 })
 
 NOISE_BAND = Schema({
@@ -299,7 +398,10 @@ SCENARIO = Schema({
     "robot": F(ROBOT, required=True, doc="the robot's start, route and limits"),
     "sensors": F(Schema({"lasers": F(ListOf(F(LASER), min_items=1), required=True, doc="2D lasers on the robot"),
                          "depth_cameras": F(ListOf(F(DEPTH_CAMERA)), [], doc="RGB-D cameras on the robot"),
-                         "wall_cameras": F(ListOf(F(WALL_CAMERA)), [], doc="fixed cameras in the world")}),
+                         "wall_cameras": F(ListOf(F(WALL_CAMERA)), [], doc="fixed cameras in the world"),
+                         "tag": F(TAG, optional=True,
+                                  doc="the tag reader for the follow driver (seed 001's RFID; required with driver: "
+                                      "follow): the target's coarse range and bearing all round the robot")}),
                  required=True, doc="the robot's sensors"),
     "pipeline": F(PIPELINE, doc="the robot's people pipeline: detectors, fusion and tracker, by type"),
     "evaluation": F(EVALUATION, doc="how the tracks are scored"),
@@ -343,7 +445,7 @@ def reference() -> str:
                     text = f"list of {item}" if isinstance(kind, ListOf) else f"mapping of names to {item}"
             else:
                 text = str(kind)
-            default = "required" if field.required else (
+            default = "required" if field.required else "left out" if field.optional else (
                 "" if isinstance(kind, (Schema, Typed)) or field.default is None and name in (schema.legacy or {})
                 else repr(field.default))
             low = "" if field.min is None else (f"> {field.min:g}" if field.exclusive_min else f">= {field.min:g}")

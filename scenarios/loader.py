@@ -117,7 +117,7 @@ def check_sensor(sensor: dict, key: str, dt: float, source: str) -> None:
 
 def check_detectors(scenario: dict, source: str) -> None:
     """Detectors attached to sensors of the scenario, each built-in one to a kind of sensor it reads."""
-    kinds = {s["name"]: kind for kind, sensors in scenario["sensors"].items() for s in sensors}
+    kinds = {s["name"]: kind for kind in ("lasers", "depth_cameras", "wall_cameras") for s in scenario["sensors"][kind]}
     pipeline = scenario["pipeline"]
     attached = [("pipeline.detector", pipeline["detector"], "lasers", "every laser")]
     for name, spec in pipeline["detectors"].items():
@@ -130,6 +130,40 @@ def check_detectors(scenario: dict, source: str) -> None:
         if reads != kind:
             raise ScenarioError(source, f"{key}.type", f"{spec['type']} reads sensors.{reads}, and {what} is one of "
                                                        f"sensors.{kind}; expected a detector for sensors.{kind}")
+
+
+def check_driver(scenario: dict, source: str) -> None:
+    """What the robot's driver needs: goals for the goals driver; a target on a known route, slower than the robot,
+    and a tag reader for the follow driver; a band that is one."""
+    robot = scenario["robot"]
+    driver = robot["driver"]
+    if driver == "goals" and not robot["goals"]:
+        raise ScenarioError(source, "robot.goals", "missing; expected at least one goal [x, y] (m, world) when "
+                                                   "robot.driver is goals")
+    near, far = robot["follow"]["band"] if robot["follow"] else (1.0, 2.0)
+    if not 0 < near < far:
+        raise ScenarioError(source, "robot.follow.band", f"[{near:g}, {far:g}]; expected [near, far] with "
+                                                         f"0 < near < far (m)")
+    if driver != "follow":
+        return
+    if robot["follow"] is None or robot["follow"]["target"] is None:
+        raise ScenarioError(source, "robot.follow.target", "missing; expected the target person (start, route, "
+                                                           "speed) when robot.driver is follow")
+    target = robot["follow"]["target"]
+    if target["route"] not in scenario["routes"]:
+        known = ", ".join(scenario["routes"]) or "none (the scenario has no routes)"
+        raise ScenarioError(source, "robot.follow.target.route",
+                            f"unknown route {target['route']!r}; expected one of: {known}")
+    if target["agent_type"] not in scenario["crowd"]["agent_types"]:
+        raise ScenarioError(source, "robot.follow.target.agent_type", f"unknown agent type; expected one of: "
+                                                                      f"{', '.join(scenario['crowd']['agent_types'])}")
+    if target["speed"] >= robot["max_speed"]:
+        raise ScenarioError(source, "robot.follow.target.speed",
+                            f"{target['speed']:g} m/s; expected below robot.max_speed ({robot['max_speed']:g} m/s), "
+                            f"or the robot could not keep up")
+    if scenario["sensors"]["tag"] is None:
+        raise ScenarioError(source, "sensors.tag", "missing; expected the tag reader ({} for its defaults) when "
+                                                   "robot.driver is follow: the follower tells its target by the tag")
 
 
 def check_geometry(scenario: dict, source: str) -> None:
@@ -190,6 +224,7 @@ def check_geometry(scenario: dict, source: str) -> None:
             seen[sensor["name"]] = key
             check_sensor(sensor, f"sensors.{kind}[{i}]", scenario["dt"], source)
     check_detectors(scenario, source)
+    check_driver(scenario, source)
     segs = wall_segments(scenario)
     radius = max(t["radius"] for t in types.values()) if types else 0.25
     places = [(f"waypoints.{n}.position", w["position"], "goal") for n, w in scenario["waypoints"].items()]
@@ -198,6 +233,16 @@ def check_geometry(scenario: dict, source: str) -> None:
     places += [(f"standing[{i}].position", s["position"], "standing place") for i, s in enumerate(scenario["standing"])]
     places += [("robot.start", scenario["robot"]["start"][:2], "robot start")]
     places += [(f"robot.route[{i}]", p, "robot waypoint") for i, p in enumerate(scenario["robot"]["route"] or [])]
+    target = (scenario["robot"]["follow"] or {}).get("target")
+    if target is not None:
+        places += [("robot.follow.target.start", target["start"], "the target's start")]
+    clearance = np.full(len(places), radius)
+    what_clearance = ["the largest body radius"] * len(places)
+    # a goal the robot's centre must come within goal_radius of: its disc must fit there, or a wall is in the way
+    goals = (scenario["robot"]["goals"] or []) if scenario["robot"]["driver"] == "goals" else []
+    places += [(f"robot.goals[{i}]", p, "robot goal") for i, p in enumerate(goals)]
+    clearance = np.r_[clearance, np.full(len(goals), scenario["robot"]["radius"])]
+    what_clearance += ["robot.radius"] * len(goals)
     if not places or len(segs) == 0:
         return
     pts = np.array([p for _, p, _ in places], float)
@@ -205,8 +250,8 @@ def check_geometry(scenario: dict, source: str) -> None:
     inside = np.zeros(len(pts), bool)
     for poly in scenario["map"]["obstacles"]:
         inside |= inside_polygon(pts, np.asarray(poly, float))
-    for (key, p, what), d, ins in zip(places, dist, inside):
-        if ins or d < radius:
+    for (key, p, what), d, ins, need, why in zip(places, dist, inside, clearance, what_clearance):
+        if ins or d < need:
             where = "inside an obstacle" if ins else f"{d:.2f} m from a wall"
             raise ScenarioError(source, key, f"{what} {p} lies inside a wall ({where}); expected at least "
-                                             f"{radius} m (the largest body radius) of clearance from every wall")
+                                             f"{need:g} m ({why}) of clearance from every wall")

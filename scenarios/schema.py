@@ -19,13 +19,17 @@ class ScenarioError(ValueError):
 
     def __init__(self, source: str, key: str, message: str):
         super().__init__(f"{source}: {key}: {message}")
-        self.source, self.key = source, key
+        self.source, self.key, self.message = source, key, message
+
+    def __reduce__(self):  # whole again in another process (crowdsim navigate's workers)
+        return type(self), (self.source, self.key, self.message)
 
 
 @dataclass(frozen=True)
 class Field:
     """One key: ``kind`` is 'float', 'int', 'str', 'bool', 'point' ([x, y]), 'point3' ([x, y, z]), 'pose'
-    ([x, y, yaw]), 'points' (a list of [x, y]), a nested ``Schema``, ``ListOf``, ``MapOf`` or ``Typed``."""
+    ([x, y, yaw]), 'points' (a list of [x, y]), a nested ``Schema``, ``ListOf``, ``MapOf`` or ``Typed``. An
+    ``optional`` section (a ``Schema`` or ``Typed``) left out, or given as null, is None rather than its defaults."""
 
     kind: Any
     default: Any = None
@@ -36,6 +40,7 @@ class Field:
     choices: tuple | None = None
     allow_inf: bool = False
     doc: str = ""
+    optional: bool = False  # a section (a Schema or Typed) that may be left out: None then, not its defaults
 
 
 @dataclass(frozen=True)
@@ -121,6 +126,8 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
 
     if isinstance(spec, Field):
         kind = spec.kind
+        if spec.optional and value is None:
+            return None
         if isinstance(kind, (Schema, ListOf, MapOf, Typed)):
             out = validate(value, kind, source, key)
         elif kind == "float":
@@ -189,7 +196,7 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
                 out[name] = validate(value[name], field, source, sub)
             elif field.required:
                 raise ScenarioError(source, sub, "missing required key")
-            elif isinstance(field.kind, (Schema, Typed)):
+            elif isinstance(field.kind, (Schema, Typed)) and not field.optional:
                 out[name] = validate({}, field.kind, source, sub)
             else:
                 out[name] = field.default

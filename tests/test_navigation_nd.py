@@ -129,7 +129,9 @@ def test_in_a_rollout_the_zone_planner_crosses_behind_the_passer_by_and_nd_in_fr
     behind, zone_least = drive_past("zone", (2.0, -3.0), (0.0, 0.5))
     in_front, nd_least = drive_past("nd", (2.0, -3.0), (0.0, 0.5))
     assert behind < -1.0 < 0.0 < in_front
-    assert zone_least > nd_least
+    # the zone planner gives way short of the person's path (this scripted person does not avoid the robot) and
+    # their discs never touch: the robot's radius plus an adult's, 0.425 + 0.25 m
+    assert zone_least > 0.675 and nd_least > 0.675
 
 
 def test_planners_command_in_odom_whatever_the_pose():

@@ -14,7 +14,7 @@ One call (``NearnessDiagram.solve``), the obstacles and the goal in the robot fr
 3. free walking area -- the goal itself when it is in sight and reachable, else the rising discontinuity nearest
    to the goal's sector whose gap the robot can reach (the navigability test below).
 4. situation and motion law -- from four binary criteria (safety: obstacles within the security distance ``ds`` of
-   the robot's edge; their distribution: on one or both sides of the chosen direction; goal within the free area;
+   the robot's edge, ahead of its axle (step 5: the robot never drives backwards); their distribution: on one or both sides of the chosen direction; goal within the free area;
    free area wide or narrow):
 
    * HSGR (high safety, goal in region): head for the goal.
@@ -58,9 +58,10 @@ class NDResult:
     situation: str  # HSGR, HSWR, HSNR, LS1, LS2, or "blocked" (no reachable region: stop)
 
 
-def nearest_per_sector(points: np.ndarray, sectors: int) -> tuple[np.ndarray, np.ndarray]:
+def nearest_per_sector(points: np.ndarray, sectors: int, values: np.ndarray | None = None):
     """The nearest of ``points`` [m, 2] in each of ``sectors`` equal angular sectors about the origin, sector k
-    spanning [-pi + k w, -pi + (k+1) w): distances [n] (inf where empty) and the points [n, 2] (NaN where empty)."""
+    spanning [-pi + k w, -pi + (k+1) w): distances [n] (inf where empty) and the points [n, 2] (NaN where empty);
+    with ``values`` [m], also the nearest point's value per sector (NaN where empty)."""
     dist = np.hypot(points[:, 0], points[:, 1])
     sector = sector_of(np.arctan2(points[:, 1], points[:, 0]), sectors)
     d = np.full(sectors, np.inf)
@@ -68,7 +69,11 @@ def nearest_per_sector(points: np.ndarray, sectors: int) -> tuple[np.ndarray, np
     nearest = np.full((sectors, 2), np.nan)
     hit = dist == d[sector]  # of equally near points in a sector, one is kept
     nearest[sector[hit]] = points[hit]
-    return d, nearest
+    if values is None:
+        return d, nearest
+    value = np.full(sectors, np.nan)
+    value[sector[hit]] = np.asarray(values, float)[hit]
+    return d, nearest, value
 
 
 def sector_of(angles, sectors: int):
@@ -107,12 +112,19 @@ class NearnessDiagram:
         self.gap = 2.0 * self.radius
         self.centres = -np.pi + (np.arange(self.n) + 0.5) * (2 * np.pi / self.n)
 
-    def solve(self, points: np.ndarray, goal: np.ndarray) -> NDResult:
+    def solve(self, points: np.ndarray, goal: np.ndarray, security: np.ndarray | None = None) -> NDResult:
         """The command towards ``goal`` [2] among obstacle ``points`` [m, 2] (NaN rows ignored), both in the robot
-        frame."""
+        frame. ``security`` [m]: each point's own security distance in place of ``security_distance`` (for points
+        that are no physical obstacle but a margin kept already, a person's security zone say)."""
         n = self.n
         points = np.asarray(points, float).reshape(-1, 2)
-        d, nearest = nearest_per_sector(points[np.isfinite(points).all(axis=1)], n)
+        finite = np.isfinite(points).all(axis=1)
+        if security is None:
+            d, nearest = nearest_per_sector(points[finite], n)
+            ds = self.ds
+        else:
+            d, nearest, ds = nearest_per_sector(points[finite], n, np.asarray(security, float)[finite])
+            ds = np.where(np.isnan(ds), self.ds, ds)
         # an obstacle inside the robot's footprint reads as touching it, 1 cm out (the authors' code does the same)
         touching = d < self.radius + 0.01
         d[touching] = self.radius + 0.01
@@ -140,9 +152,12 @@ class NearnessDiagram:
             return NDResult(0.0, 0.0, float("nan"), "blocked")
 
         # the dangerous obstacles: within ds of the robot's edge, on the left or right of the chosen direction
-        ratio = (d - self.radius) / self.ds
+        ratio = (d - self.radius) / ds
         side = wrap_angle(angle - theta_par)
-        danger = ratio <= 1.0
+        # ahead of the axle only: this robot drives forwards (v >= 0) and turns on the spot, which sweeps nothing
+        # beyond its disc, so what lies behind it cannot be hit by its motion (ND's holonomic robot could back into
+        # it); counted all round, people passing behind the robot held it to a crawl in low safety
+        danger = (ratio <= 1.0) & (np.cos(angle) > 0)
         left = np.where(danger & (side >= 0), ratio, np.inf)
         right = np.where(danger & (side < 0), ratio, np.inf)
         il, ir = int(left.argmin()), int(right.argmin())

@@ -1,0 +1,172 @@
+"""``crowdsim navigate``: one planner over a fixed suite of seeds of a navigation scenario, scored in memory.
+
+Each seed is one episode: the scenario (its robot driven to its goals or following its target) with the planner
+named on the command line, the crowd's warm-up, then the frames up to the last goal or the duration. The episode
+is built from the frames as a ``NavEpisode`` (the robot's true pose, every person alive, the walls, the task; for
+following, the follower's track of the target and whether the robot's sensors saw it) and scored by
+``evaluation.navigation.navigation_metrics``, the figures ``crowdsim evaluate-nav`` gives for a run directory. No run
+directory is written. Seeds S..S+N-1 are the suite, so two planners meet the same crowds; every seed starts over
+from ``Simulation.reset(seed)``, so its figures do not depend on the workers or the order.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from evaluation.io import EvaluationInputError
+from evaluation.navigation import NavEpisode, PersonRows, navigation_metrics
+from evaluation.navigation_report import OUTCOME_COLUMNS, SOCIAL_COLUMNS, json_safe, mean_sd, nav_table
+from scenarios import ScenarioError
+from scenarios.format import PLANNER
+from scenarios.geometry import wall_segments
+from scenarios.schema import validate
+
+from .loop import Simulation
+
+# the columns of the table: (label, key, scale, format), as evaluate-nav's
+GOAL_COLUMNS = ("success", "time_to_goal", "path_length", "path_irregularity", "min_distance",
+                "discomfort_frequency", "intimate_share", "personal_share", "min_time_to_collision", "social_work",
+                "crossings_front", "crossings_behind", "mean_linear_acceleration", "peak_linear_jerk")
+FOLLOW_COLUMNS = ("success", "in_band_share", "distance_error", "target_losses", "mean_reacquire_time",
+                  "target_hidden_share", "path_length", "min_distance", "discomfort_frequency", "intimate_share",
+                  "personal_share", "min_time_to_collision", "crossings_front", "crossings_behind")
+
+
+def with_planner(scenario: dict, planner: str) -> dict:
+    """The scenario with ``robot.planner`` of type ``planner``: its own parameters when it names that type
+    already, the type's defaults otherwise. A scenario whose robot drives its route has no planner to change:
+    ScenarioError naming robot.driver."""
+    robot = scenario["robot"]
+    if robot["driver"] == "route":
+        raise ScenarioError(scenario["source"], "robot.driver",
+                            "route (the robot drives its route, no planner); expected goals or follow: crowdsim "
+                            "navigate compares planners on a scenario whose robot drives to goals or follows a "
+                            "person")
+    spec = robot["planner"] if robot["planner"]["type"] == planner else validate(
+        {"type": planner}, PLANNER, "--planner", "robot.planner")
+    return {**scenario, "robot": {**robot, "planner": spec}}
+
+
+def episode_metrics(sim: Simulation, seed: int, duration: float) -> dict:
+    """One episode at ``seed``: warm-up, then the frames up to the last goal or ``duration``, scored."""
+    sim.reset(seed)
+    sim.warm_up()
+    stamp, pose, follow = [], [], []
+    frame_of, ids, position, velocity, radius = [], [], [], [], []
+    for frame in sim.frames(duration):
+        a = frame.agents
+        frame_of.append(np.full(len(a.id), len(stamp)))
+        ids.append(a.id)
+        position.append(a.position)
+        velocity.append(a.velocity)
+        radius.append(a.radius)
+        stamp.append(frame.stamp)
+        pose.append(frame.robot_pose)
+        follow.append((frame.target_track, frame.target_visible))
+    persons = PersonRows(np.concatenate(frame_of), np.concatenate(ids), np.concatenate(position),
+                         np.concatenate(velocity), np.concatenate(radius))
+    robot = sim.scenario["robot"]
+    common = dict(stamp=np.array(stamp), robot_pose=np.array(pose), robot_radius=robot["radius"], persons=persons,
+                  walls=wall_segments(sim.scenario), time_limit=duration)
+    if sim.driver == "goals":
+        ep = NavEpisode(task="goal", goal=np.array(robot["goals"][-1]), goal_radius=robot["goal_radius"], **common)
+    else:
+        track, visible = np.array(follow).T
+        ep = NavEpisode(task="follow", target_id=sim.target_id, band=tuple(robot["follow"]["band"]),
+                        target_track=track, target_visible=visible, **common)
+    return navigation_metrics(ep)
+
+
+_worker: dict = {}
+
+
+def _start_worker(scenario: dict, duration: float) -> None:
+    _worker["sim"], _worker["duration"] = Simulation(scenario), duration
+
+
+def _run_seed(seed: int) -> dict:
+    return episode_metrics(_worker["sim"], seed, _worker["duration"])
+
+
+def navigate(scenario: dict, seeds: list[int], duration: float, workers: int = 1, progress: bool = True) -> list[dict]:
+    """The navigation figures of each seed's episode, in the order of ``seeds``; over ``workers`` processes (each
+    with a simulation of its own) when more than one."""
+    bar = tqdm(total=len(seeds), unit="seed", disable=not progress,
+               desc=f"{scenario['name']} / {scenario['robot']['planner']['type']}")
+    try:
+        if workers <= 1:
+            sim = Simulation(scenario)
+            runs = []
+            for seed in seeds:
+                runs.append(episode_metrics(sim, seed, duration))
+                bar.update()
+            return runs
+        with ProcessPoolExecutor(workers, mp_context=get_context("spawn"), initializer=_start_worker,
+                                 initargs=(scenario, duration)) as pool:
+            runs = []
+            for figures in pool.map(_run_seed, seeds):
+                runs.append(figures)
+                bar.update()
+            return runs
+    finally:
+        bar.close()
+
+
+def counts(runs: list[dict]) -> dict:
+    """How many episodes ended in success, a collision (with a person, a wall), a timeout or early."""
+    total = {key: sum(bool(r[key]) for r in runs) for key in ("success", "collision_person", "collision_wall",
+                                                              "timeout", "ended_early")}
+    return {"episodes": len(runs), "successes": total["success"],
+            "collisions": total["collision_person"] + total["collision_wall"],
+            "collisions_person": total["collision_person"], "collisions_wall": total["collision_wall"],
+            "timeouts": total["timeout"], "ended_early": total["ended_early"]}
+
+
+def summary(runs: list[dict], task: str) -> str:
+    """The counts, and the mean and sample sd over the episodes of the figures that matter for the task."""
+    columns = {c[1]: c for c in OUTCOME_COLUMNS + SOCIAL_COLUMNS}
+    chosen = [columns[key] for key in (GOAL_COLUMNS if task == "goal" else FOLLOW_COLUMNS)]
+    table = nav_table([""] * len(runs), runs, chosen).splitlines()
+    mean_row, sd_row = table[-2], table[-1]
+    c = counts(runs)
+    line = (f"{c['successes']}/{c['episodes']} successes, {c['collisions']} collisions ({c['collisions_person']} "
+            f"with a person, {c['collisions_wall']} with a wall), {c['timeouts']} timeouts, {c['ended_early']} ended "
+            f"early")
+    return "\n".join([line, "", *table[:2], mean_row, sd_row])
+
+
+def navigate_main(scenario: dict, planner: str, first_seed: int, n_seeds: int, duration: float | None,
+                  json_path: Path | None, workers: int = 1, progress: bool = True) -> str:
+    """``crowdsim navigate``: the table (and, with ``json_path``, a new file with every episode's figures)."""
+    if json_path is not None and Path(json_path).exists():
+        raise EvaluationInputError(f"--json {json_path}: already exists; expected a new file (nothing was run)")
+    if n_seeds < 1:
+        raise EvaluationInputError(f"--seeds: expected at least 1 episode, got {n_seeds}")
+    if workers < 1:
+        raise EvaluationInputError(f"--workers: expected at least 1 process, got {workers}")
+    if duration is not None and not (math.isfinite(duration) and duration > 0):
+        raise EvaluationInputError(f"--duration: expected a time above 0 s, got {duration}")
+    if first_seed < 0:
+        raise EvaluationInputError(f"--first-seed: expected a seed of at least 0, got {first_seed}")
+    scenario = with_planner(scenario, planner)
+    duration = scenario["duration"] if duration is None else float(duration)
+    seeds = list(range(first_seed, first_seed + n_seeds))
+    runs = navigate(scenario, seeds, duration, workers, progress)
+    task = "goal" if scenario["robot"]["driver"] == "goals" else "follow"
+    if json_path is not None:
+        mean, sd = mean_sd(runs)
+        Path(json_path).write_text(json.dumps({
+            "scenario": scenario["name"], "planner": scenario["robot"]["planner"], "task": task,
+            "duration_s": duration, "seeds": seeds, "counts": counts(runs),
+            "runs": [{"seed": seed, **json_safe(r)} for seed, r in zip(seeds, runs)],
+            "mean": json_safe(mean), "sd": json_safe(sd)}, indent=2) + "\n")
+    head = (f"{scenario['name']}, planner {scenario['robot']['planner']['type']}, seeds {seeds[0]}..{seeds[-1]}, "
+            f"{duration:g} s each: mean and sd over the {len(runs)} episodes")
+    return head + "\n\n" + summary(runs, task)
