@@ -275,9 +275,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("navigate", help="a planner over a fixed suite of seeds of a navigation scenario (driver "
                                         "goals or follow), scored in memory: the navigation metrics' mean and sd")
     p.add_argument("scenario", help="a bundled scenario name or a YAML file whose robot.driver is goals or follow")
-    p.add_argument("--planner", required=True,
+    p.add_argument("--planner",
                    help="zone, nd, straight, social_force or module.path:ClassName (the scenario's own parameters "
-                        "when it names that type, else the type's defaults)")
+                        "when it names that type, else the type's defaults); default: the scenario's robot.planner")
     p.add_argument("--seeds", type=int, required=True, help="episodes: seeds S..S+N-1")
     p.add_argument("--first-seed", type=int, default=1, help="S, the suite's first seed (default 1)")
     p.add_argument("--duration", type=float, help="each episode's time limit in s (default: the scenario's duration)")

@@ -39,17 +39,17 @@ FOLLOW_COLUMNS = ("success", "in_band_share", "distance_error", "target_losses",
                   "personal_share", "min_time_to_collision", "crossings_front", "crossings_behind")
 
 
-def with_planner(scenario: dict, planner: str) -> dict:
+def with_planner(scenario: dict, planner: str | None) -> dict:
     """The scenario with ``robot.planner`` of type ``planner``: its own parameters when it names that type
-    already, the type's defaults otherwise. A scenario whose robot drives its route has no planner to change:
-    ScenarioError naming robot.driver."""
+    already (or ``planner`` is None), the type's defaults otherwise. A scenario whose robot drives its route has no
+    planner to change: ScenarioError naming robot.driver."""
     robot = scenario["robot"]
     if robot["driver"] == "route":
         raise ScenarioError(scenario["source"], "robot.driver",
                             "route (the robot drives its route, no planner); expected goals or follow: crowdsim "
                             "navigate compares planners on a scenario whose robot drives to goals or follows a "
                             "person")
-    spec = robot["planner"] if robot["planner"]["type"] == planner else validate(
+    spec = robot["planner"] if planner in (None, robot["planner"]["type"]) else validate(
         {"type": planner}, PLANNER, "--planner", "robot.planner")
     return {**scenario, "robot": {**robot, "planner": spec}}
 
@@ -142,7 +142,7 @@ def summary(runs: list[dict], task: str) -> str:
     return "\n".join([line, "", *table[:2], mean_row, sd_row])
 
 
-def navigate_main(scenario: dict, planner: str, first_seed: int, n_seeds: int, duration: float | None,
+def navigate_main(scenario: dict, planner: str | None, first_seed: int, n_seeds: int, duration: float | None,
                   json_path: Path | None, workers: int = 1, progress: bool = True) -> str:
     """``crowdsim navigate``: the table (and, with ``json_path``, a new file with every episode's figures)."""
     if json_path is not None and Path(json_path).exists():

@@ -135,6 +135,9 @@ ODOMETRY = Schema({
 PLANNER_COMMON = {
     "goal_tolerance": F("float", 0.1, min=0.0,
                         doc="m, the planner stops this near its goal (well inside the follower's band; an assumption)"),
+    "stop_margin": F("float", 0.05, min=0.0,
+                     doc="m, every planner brakes to stop this short of the nearest laser return in its path (an "
+                         "assumption)"),
 }
 ND_PLANNER = {
     **PLANNER_COMMON,

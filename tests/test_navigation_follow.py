@@ -126,3 +126,13 @@ def test_a_lost_user_is_looked_for_where_they_were_going():
     f.command(20.0, HERE, np.zeros(2), np.zeros((0, 2)), gone, None)  # at most predict_time (3 s) on: (3, 1.5)
     expected = np.array([3.0, 1.5])
     np.testing.assert_allclose(f.planner.goal, expected * (1 - aim / np.hypot(*expected)))
+
+
+def test_of_the_tracks_a_coarse_reading_agrees_with_it_takes_the_one_where_the_user_is_expected():
+    f = follower()
+    step(f, persons([9], [[3.0, 0.0]]), tag_at([3.0, 0.0]))
+    assert f.target_track == 9
+    # her track is lost; two new ones, both within the reading's gate (20 deg bearing sd at 3 m: +-1 m each sd)
+    two = persons([21, 22], [[3.0, 0.6], [3.1, 0.05]])
+    step(f, two, tag_at([3.0, 0.6]))  # the reading is nearer the passer-by, 21
+    assert f.target_track == 22  # but 22 is where she was last seen

@@ -11,10 +11,10 @@ import yaml
 
 from crowdsim.cli import main
 from crowdsim.loop import Simulation
-from crowdsim.navigate import episode_metrics
+from crowdsim.navigate import episode_metrics, with_planner
 from crowdsim.run import run
 from evaluation.navigation import navigation_metrics, read_nav_run
-from pipeline.navigation.planners import PLANNERS, ROBOT_KEYS
+from pipeline.navigation.planners import COMMON, PLANNERS, ROBOT_KEYS
 from scenarios import ScenarioError, load_scenario
 from scenarios.format import PLANNER_TYPES, TAG
 from sensors.tag import TAG_DEFAULTS
@@ -112,12 +112,9 @@ def test_driver_defaults_and_the_planner_and_tag_schemas_match_their_classes(tmp
     assert robot["goal_radius"] == 0.3 and robot["planner"]["type"] == "zone"
     assert sc["sensors"]["tag"] is None
     assert set(PLANNER_TYPES) == set(PLANNERS)
-    for name, schema in PLANNER_TYPES.items():
-        defaults = {k: v for k, v in PLANNERS[name].DEFAULTS.items()}
-        defaults.update((k, v) for k, v in {"goal_tolerance": 0.1}.items())
-        assert {k: f.default for k, f in schema.fields.items()} == {
-            k: v for k, v in {**dict.fromkeys(schema.fields), **defaults}.items() if k in schema.fields}
-        assert set(schema.fields) == set(defaults) - {"max_acceleration"} - set(ROBOT_KEYS)
+    for name, schema in PLANNER_TYPES.items():  # the robot's keys come from robot, the rest from the schema
+        defaults = {k: v for k, v in {**COMMON, **PLANNERS[name].DEFAULTS}.items() if k not in ROBOT_KEYS}
+        assert {k: f.default for k, f in schema.fields.items()} == defaults
     assert {k: f.default for k, f in TAG.fields.items()} == TAG_DEFAULTS
     follow = load(tmp_path, follow_room())
     assert follow["robot"]["follow"]["band"] == [1.0, 2.0] and follow["sensors"]["tag"] == TAG_DEFAULTS
@@ -248,6 +245,17 @@ def test_navigate_prints_the_table_and_writes_json(tmp_path, capsys):
     assert main(["navigate", str(path), "--planner", "straight", "--seeds", "1", "--json", str(out),
                  "--quiet"]) == 2
     assert "already exists" in capsys.readouterr().err
+
+
+def test_navigate_without_planner_keeps_the_scenarios_own_and_with_another_takes_its_defaults(tmp_path):
+    path = tmp_path / "nav.yaml"
+    path.write_text(yaml.safe_dump(goals_room(planner={"type": "zone", "zone_reach": 2.5})))
+    sc = load_scenario(path)
+    assert with_planner(sc, None)["robot"]["planner"] == sc["robot"]["planner"]
+    assert with_planner(sc, None)["robot"]["planner"]["zone_reach"] == 2.5
+    assert with_planner(sc, "zone")["robot"]["planner"]["zone_reach"] == 2.5
+    nd = with_planner(sc, "nd")["robot"]["planner"]
+    assert nd["type"] == "nd" and "zone_reach" not in nd
 
 
 def test_navigate_refuses_a_route_scenario_and_an_unknown_planner(tmp_path, capsys):
