@@ -199,6 +199,10 @@ def _cmd_bench(args) -> int:
         run_env_benchmark(json_path=args.json, quick=args.quick, crowdnav=args.crowdnav,
                           crowdnav_dir=args.crowdnav_dir, socnavgym=args.socnavgym,
                           socnavgym_config=args.socnavgym_config)
+    elif args.what == "dataset":
+        from .bench.dataset import run_dataset_benchmark
+
+        run_dataset_benchmark(json_path=args.json, quick=args.quick)
     elif args.what == "sensors":
         from .bench.sensors import run_sensor_benchmarks
 
@@ -228,6 +232,50 @@ def _cmd_experiment(args) -> int:
         print(f"{name:7s} on {e['episodes']} evaluation seeds: success {e['success_rate']:.0%}, collision "
               f"{e['collision_rate']:.0%}, timeout {e['timeout_rate']:.0%}, mean return {e['mean_return']:.2f}")
     print(f"learning curve: {out / 'learning_curve.png'}")
+    return 0
+
+
+def _cmd_dataset_generate(args) -> int:
+    from scenarios import load_scenario
+
+    try:
+        from .datasets.generate import generate
+    except ImportError as e:
+        raise UsageError(f"crowdsim dataset: needs {e.name}, of the data extra: pip install -e \".[data]\"") from None
+    scenarios = [load_scenario(name) for name in args.scenarios]
+    manifest = generate(scenarios, args.scenarios, Path(args.out), args.episodes, seed=args.seed,
+                        duration=args.duration, workers=args.workers, ray_address=args.ray, rate=args.rate_scale,
+                        density=args.density_scale, route_jitter=args.route_jitter, compression=args.compression,
+                        progress=not args.quiet)
+    episodes = manifest["episodes"]
+    size = sum(f["size"] for e in episodes for f in e["files"].values())
+    frames = sum(e["frames"] for e in episodes)
+    print(f"{args.out}: {len(episodes)} episodes, {frames:,} frames, {size / 1e6:,.1f} MB; splits "
+          + ", ".join(f"{s} {len(ids)}" for s, ids in manifest["splits"].items()) + f", mini {len(manifest['mini'])}")
+    return 0
+
+
+def _cmd_dataset_export(args) -> int:
+    import json
+
+    from .datasets.export import export_dataset
+
+    print(json.dumps(export_dataset(Path(args.folder), args.format, Path(args.out), args.split), indent=1, default=str))
+    return 0
+
+
+def _cmd_dataset_evaluate_detector(args) -> int:
+    import json
+
+    from .datasets.detection_eval import detection_table, evaluate_detector
+    from .datasets.layout import DatasetError
+
+    if args.json and Path(args.json).exists():
+        raise DatasetError(f"--json {args.json}: already exists; expected a new file (nothing was evaluated)")
+    result = evaluate_detector(Path(args.folder), args.detector, args.split, min_beams=args.min_beams)
+    print(detection_table([result]))
+    if args.json:
+        Path(args.json).write_text(json.dumps(result.as_dict(), indent=1) + "\n")
     return 0
 
 
@@ -304,13 +352,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_scenario_keys)
     p = sub.add_parser("bench", help="measure the crowd, the lasers, the tracker and the whole loop; "
                                      "`bench sim`: the crowd against JuPedSim; `bench sensors`: every sensor; "
-                                     "`bench eval`: the evaluation; `bench env`: the gym environments")
-    p.add_argument("what", nargs="?", choices=("loop", "sim", "sensors", "eval", "env"), default="loop",
+                                     "`bench eval`: the evaluation; `bench env`: the gym environments; `bench dataset`: "
+                                     "dataset generation")
+    p.add_argument("what", nargs="?", choices=("loop", "sim", "sensors", "eval", "env", "dataset"),
+                   default="loop",
                    help="loop (default): every part and the airport loop; sim: the crowd simulator at 100, 1000 "
                         "and 5000 agents side by side with JuPedSim's social force model; sensors: each sensor's "
                         "cost with 100 and 500 people, batched rays, and the robot's sensor mix against real time; "
                         "eval: the evaluation's frames/s on 5000 frames of 80 persons; env: environment steps/s, "
-                        "one env and the vector envs")
+                        "one env and the vector envs; dataset: a dataset episode's frames/s and bytes per frame")
     p.add_argument("--json", help="also write the figures to this JSON file")
     p.add_argument("--quick", action="store_true", help="shorter measurements (for a smoke test)")
     p.add_argument("--crowdnav", metavar="PYTHON", help="bench env: also time CrowdNav with this interpreter")
@@ -328,6 +378,50 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--eval-episodes", type=int, default=100, help="evaluation episodes per policy (default 100)")
     p.add_argument("--out", help="output directory (default runs/ppo-<time>); must be new or empty")
     p.set_defaults(func=_cmd_experiment)
+    p = sub.add_parser("dataset", help="labelled datasets: generate, export, evaluate-detector "
+                                       "(docs/dataset-format.md)")
+    dataset = p.add_subparsers(dest="dataset_command", required=True)
+    p = dataset.add_parser("generate", help="N episodes of labelled sensor data, in parallel and resumably")
+    p.add_argument("scenarios", nargs="+", metavar="SCENARIO",
+                   help="bundled names or files; episode k runs the (k mod S)-th of the S given")
+    p.add_argument("--episodes", type=int, required=True, help="episodes in all")
+    p.add_argument("--out", required=True, help="the dataset folder: new, empty, or a dataset of this very "
+                                                "command, which is verified and completed")
+    p.add_argument("--seed", type=int, default=0, help="root seed S: episode k is seeded from "
+                                                       "SeedSequence(S).spawn(...)[k] (default 0)")
+    p.add_argument("--duration", type=float, help="s recorded per episode (default: the scenario's)")
+    p.add_argument("--workers", type=int, default=1, help="local processes (default 1)")
+    p.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
+                   help="run the episodes as Ray tasks: on the cluster at ADDRESS, or a local one (needs [ray]); "
+                        "the folder must be one every node writes to")
+    p.add_argument("--rate-scale", type=float, nargs=2, metavar=("LO", "HI"),
+                   help="per episode, every source's rate times a factor uniform in [LO, HI]")
+    p.add_argument("--density-scale", type=float, nargs=2, metavar=("LO", "HI"),
+                   help="per episode, every agent cluster's and standing group's count times a factor uniform in "
+                        "[LO, HI]")
+    p.add_argument("--route-jitter", type=float, default=0.0, metavar="M",
+                   help="per episode, the robot's start and route waypoints each moved within M m (default 0)")
+    p.add_argument("--compression", choices=("gzip", "lzf", "none"), default="gzip",
+                   help="sensors.h5's chunk compression (Parquet: zstd unless none; default gzip)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(func=_cmd_dataset_generate)
+    p = dataset.add_parser("export", help="a dataset in another format: DROW, MOTChallenge, ROS 2 or ROS 1 bags")
+    p.add_argument("folder", metavar="DIR", help="a dataset folder (crowdsim dataset generate)")
+    p.add_argument("--format", required=True, choices=("drow", "motchallenge", "rosbag2", "rosbag1"),
+                   help="the format to write")
+    p.add_argument("--out", required=True, help="where to write it: a new or empty folder")
+    p.add_argument("--split", help="train, val, test or mini (default: every episode)")
+    p.set_defaults(func=_cmd_dataset_export)
+    p = dataset.add_parser("evaluate-detector", help="a detector's detections in a dataset scored as DR-SPAAM: AP, "
+                                                     "peak F1 and EER at 0.3 and 0.5 m")
+    p.add_argument("folder", metavar="DIR", help="a dataset folder (crowdsim dataset generate)")
+    p.add_argument("--detector", default="fusion", help="a laser's name, or fusion (default): the fused detections")
+    p.add_argument("--split", default="test", help="train, val, test (default) or mini")
+    p.add_argument("--min-beams", type=int, default=6, metavar="K",
+                   help="score persons hit by at least K beams of the detector's laser (fusion: of any laser); "
+                        "default 6, DR-SPAAM's more than 5 points")
+    p.add_argument("--json", help="also write the counts and scores to this new file")
+    p.set_defaults(func=_cmd_dataset_evaluate_detector)
     return parser
 
 
@@ -335,6 +429,7 @@ def main(argv: list[str] | None = None) -> int:
     from evaluation.io import EvaluationInputError
     from scenarios import ScenarioError
 
+    from .datasets.layout import DatasetError
     from .outdir import RunDirError
 
     args = build_parser().parse_args(argv)
@@ -342,7 +437,7 @@ def main(argv: list[str] | None = None) -> int:
         warnings.showwarning = _show_warning
         try:
             return args.func(args)
-        except (ScenarioError, RunDirError, EvaluationInputError, UsageError) as e:
+        except (ScenarioError, RunDirError, EvaluationInputError, UsageError, DatasetError) as e:
             print(f"crowdsim: error: {e}", file=sys.stderr)
             return 2
 

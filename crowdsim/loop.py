@@ -18,7 +18,7 @@ seed, one per component, so adding a sensor does not change the crowd.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -76,6 +76,8 @@ class Frame:
     target_visible: bool = False
     tag: TagReading | None = None
     collision: bool = False
+    # each detector's own output since the previous Frame (sensor -> its detections, odom), before the fusion
+    detector_outputs: dict[str, DetectedPersons] = field(default_factory=dict)
 
 
 @dataclass
@@ -262,8 +264,8 @@ class Simulation:
             self._latest_seen[scan.frame] = (stamp, agents.id, beams, self._laser_view(self.lasers[k], agents))
         t2 = time.perf_counter()
         self.timing.sensors_s += t2 - t1
-        detections = self.pipeline.fusion.fuse(self._pending)
-        self._pending = {}
+        outputs, self._pending = self._pending, {}
+        detections = self.pipeline.fusion.fuse(outputs)
         t3 = time.perf_counter()
         tracks = self.pipeline.tracker.update(stamp, detections)
         self.timing.tracker_s += time.perf_counter() - t3
@@ -274,7 +276,7 @@ class Simulation:
         score = self.clearmot.update(gt.track_id, gt.position, tracks.track_id, tracks.position, tags.ignore)
         frame = Frame(self._frame, stamp, self.robot.pose.copy(), self.robot.world_T_odom, agents, scans,
                       detections, tracks, gt, tags, score, visibility, self._pending_depth, self._pending_camera,
-                      collision=self._collided)
+                      collision=self._collided, detector_outputs=outputs)
         if self.planner is not None:
             self._navigate(frame)
         self._pending_depth, self._pending_camera, self._collided = [], [], False
@@ -370,8 +372,8 @@ class Simulation:
             image = camera.capture(stamp)
             self._detect(image)
             self._pending_depth.append(image)
-            ids, share = camera.visibility(image)
-            self._latest_seen[image.frame] = (stamp, agents.id, _on(agents.id, ids, share),
+            camera.visibility(image)
+            self._latest_seen[image.frame] = (stamp, agents.id, _on(agents.id, image.ids, image.visible_fraction),
                                               self._camera_view(camera, agents))
         for k in wall_due:
             camera = self.wall_cameras[k]

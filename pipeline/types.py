@@ -54,7 +54,10 @@ class DepthFrame:
 
     ``depth`` [h, w] float32 is the z-depth in metres, NaN where the camera measured nothing. ``points`` [n, 3] are
     the valid pixels back-projected, in the same frame. ``person_id`` [h, w] is the ground-truth id of the person
-    each pixel shows (-1 for none; simulation-only). ``rgb`` [h, w, 3] uint8 when the camera has colour.
+    each pixel shows (-1 for none; simulation-only). ``rgb`` [h, w, 3] uint8 when the camera has colour. The
+    simulation fills in, as a wall camera's frame has them, per person the image shows (rows of ``ids``): the box
+    around the visible pixels, the box around the person as it would show unoccluded, and the visible fraction
+    (simulation-only; None until filled).
     """
 
     stamp: float
@@ -63,6 +66,10 @@ class DepthFrame:
     points: np.ndarray
     person_id: np.ndarray
     rgb: np.ndarray | None = None
+    ids: np.ndarray | None = None
+    boxes: np.ndarray | None = None
+    full_boxes: np.ndarray | None = None
+    visible_fraction: np.ndarray | None = None
 
 
 @dataclass

@@ -11,7 +11,10 @@ return), as the manufacturers state them.
 * ``hokuyo_utm30lx``: Hokuyo UTM-30LX specification: 270 degrees at 0.25 degrees, 25 ms per scan (40 Hz),
   0.1-30 m; accuracy +-30 mm (0.1-10 m), +-50 mm (10-30 m); repeated accuracy sigma < 10 mm (0.1-10 m),
   < 30 mm (10-30 m).
-* ``sick_s300``: the DROW dataset's laser (Beyer et al. 2016: a SICK S300 at 37 cm, 225 degrees at 0.5 degrees);
+* ``sick_s300``: the DROW dataset's laser (Beyer et al. 2016: a SICK S300 at 37 cm, "225 degrees in 450 points");
+  its beam grid as DROW's and DR-SPAAM's loaders build it: 450 beams 0.5 degrees apart, so 224.5 degrees from
+  first to last (DROW ``v2/utils/__init__.py``: ``laserFoV = (450-1)*laserIncrement``; DR-SPAAM
+  ``dr_spaam/dr_spaam/datahandle/drow_handle.py``: ``get_laser_phi``), and a scan exports to DROW beam for beam;
   40 ms per scan (25 Hz) per the S300 datasheet. SICK publishes no range error for the S300's measurement output:
   the errors here are the LMS1xx's typical figures from the same knowledge base (systematic +-30 mm, statistical
   12 mm), an assumption.
@@ -29,7 +32,7 @@ LASER_PRESETS = {
                   {"up_to": 30.0, "systematic": 0.050, "statistical": 0.030}],
     },
     "sick_s300": {
-        "height": 0.37, "fov_deg": 225.0, "resolution_deg": 0.5, "range_min": 0.0, "range_max": 30.0, "rate": 25.0,
+        "height": 0.37, "fov_deg": 224.5, "resolution_deg": 0.5, "range_min": 0.0, "range_max": 30.0, "rate": 25.0,
         "noise": [{"up_to": 30.0, "systematic": 0.030, "statistical": 0.012}],
     },
 }

@@ -311,10 +311,12 @@ class DepthCamera:
         person = np.where(valid, self.scene.person_of_geom(out["geom"]), -1)
         return DepthFrame(stamp, self.name, z, points, person, out.get("rgb"))
 
-    def visibility(self, frame: DepthFrame) -> tuple[np.ndarray, np.ndarray]:
-        """Ids of the persons the image shows and the share of each that shows (the scene as at the capture)."""
-        ids, _, _, fraction = person_boxes(self.scene, self.name, self.intrinsics, frame.person_id)
-        return ids, fraction
+    def visibility(self, frame: DepthFrame) -> DepthFrame:
+        """``frame`` with its ground truth filled in: the persons the image shows, their visible and unoccluded boxes
+        and the share of each that shows (the scene as at the capture)."""
+        frame.ids, frame.boxes, frame.full_boxes, frame.visible_fraction = person_boxes(
+            self.scene, self.name, self.intrinsics, frame.person_id)
+        return frame
 
 
 class WallCamera:

@@ -152,10 +152,10 @@ def test_presets_fill_the_keys_a_scenario_leaves_out():
     assert utm["rate"] == 20.0  # given keys win over the preset
     assert utm["height"] == 0.70  # the preset leaves the mount height to the scenario
     s300 = laser_params(preset="sick_s300")
-    assert (s300["height"], s300["fov_deg"], s300["resolution_deg"]) == (0.37, 225.0, 0.5)
-    # 270 deg / 0.25 deg -> 1081 beams, 225 / 0.5 -> 451
+    assert (s300["height"], s300["fov_deg"], s300["resolution_deg"]) == (0.37, 224.5, 0.5)
+    # 270 deg / 0.25 deg -> 1081 beams; 224.5 / 0.5 -> 450, DROW's beam grid
     assert make([FRONT_WALL], preset="hokuyo_utm30lx")[1].n_beams == 1081
-    assert make([FRONT_WALL], preset="sick_s300")[1].n_beams == 451
+    assert make([FRONT_WALL], preset="sick_s300")[1].n_beams == 450
     with pytest.raises(ScenarioError, match=r"preset: expected one of sick_lms500, hokuyo_utm30lx, sick_s300"):
         laser_params(preset="velodyne")
 

@@ -50,6 +50,7 @@ class AgentStates:
     group_id: np.ndarray  # [n] int64, -1 when alone
     walked: np.ndarray  # [n] metres walked so far (drives the gait phase)
     radius: np.ndarray  # [n]
+    kind: np.ndarray  # [n] int64, the agent type: index into the scenario's crowd.agent_types (in their order)
 
 
 class Crowd:
@@ -200,4 +201,4 @@ class Crowd:
 
     def states(self) -> AgentStates:
         return AgentStates(self.t, self.id.copy(), self.pos.copy(), self.vel.copy(), self.goal.copy(),
-                           self.group.copy(), self.walked.copy(), self.radius.copy())
+                           self.group.copy(), self.walked.copy(), self.radius.copy(), self.kind.copy())
