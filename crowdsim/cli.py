@@ -260,7 +260,11 @@ def _cmd_dataset_export(args) -> int:
 
     from .datasets.export import export_dataset
 
-    print(json.dumps(export_dataset(Path(args.folder), args.format, Path(args.out), args.split), indent=1, default=str))
+    r = export_dataset(Path(args.folder), args.format, Path(args.out), args.split, args.laser)
+    print(f"{r['out']}: {r['format']}, {r['episodes']} episodes, {r['files']} files, {r['bytes'] / 1e6:,.1f} MB")
+    for key, value in r.items():
+        if key not in ("out", "format", "episodes", "files", "bytes"):
+            print(f"  {key}: {json.dumps(value)}")
     return 0
 
 
@@ -411,6 +415,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the format to write")
     p.add_argument("--out", required=True, help="where to write it: a new or empty folder")
     p.add_argument("--split", help="train, val, test or mini (default: every episode)")
+    p.add_argument("--laser", help="drow: the laser to export (default: the first on DROW's beam grid, as the "
+                                   "sick_s300 preset makes it)")
     p.set_defaults(func=_cmd_dataset_export)
     p = dataset.add_parser("evaluate-detector", help="a detector's detections in a dataset scored as DR-SPAAM: AP, "
                                                      "peak F1 and EER at 0.3 and 0.5 m")

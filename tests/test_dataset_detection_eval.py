@@ -3,8 +3,6 @@ the scores against evaluation.detection fed by hand from the tables, the min-bea
 out on paper, and the command's table, JSON and errors."""
 
 import json
-import sys
-import types
 
 import h5py
 import numpy as np
@@ -71,10 +69,6 @@ def test_min_beams_keeps_the_persons_the_table_says_were_hit_that_often(dataset,
     counts = [evaluate_detector(dataset, detector, min_beams=k).n_gt for k in (1, 4, MIN_BEAMS, 12)]
     assert counts == [int((beams >= k).sum()) for k in (1, 4, MIN_BEAMS, 12)]
     assert counts[0] > counts[1] > counts[2] > counts[3] > 0
-
-
-def test_the_fused_name_is_the_one_the_episode_writer_uses():
-    assert FUSED == episode_module.FUSED
 
 
 def write_table(path, schema: pa.Schema, rows: list[dict]) -> None:
@@ -167,18 +161,15 @@ def test_a_folder_that_is_no_dataset_or_an_existing_json_is_refused(dataset, tmp
     assert f"--json {taken}: already exists" in capsys.readouterr().err and taken.read_text() == "{}"
 
 
-def test_export_calls_export_dataset_and_prints_what_it_returns(dataset, tmp_path, monkeypatch, capsys):
-    calls = []
-
-    def export_dataset(folder, fmt, out, split):
-        calls.append((folder, fmt, out, split))
-        if fmt == "rosbag1":
-            raise DatasetError(f"--out {out}: already exists; expected a new folder")
-        return {"episodes": 3, "out": out}
-
-    monkeypatch.setitem(sys.modules, "crowdsim.datasets.export", types.SimpleNamespace(export_dataset=export_dataset))
-    assert main(["dataset", "export", str(dataset), "--format", "drow", "--out", str(tmp_path / "drow")]) == 0
-    assert json.loads(capsys.readouterr().out) == {"episodes": 3, "out": str(tmp_path / "drow")}
-    assert calls == [(dataset, "drow", tmp_path / "drow", None)]
-    assert main(["dataset", "export", str(dataset), "--format", "rosbag1", "--out", "x", "--split", "val"]) == 2
-    assert "crowdsim: error: --out x: already exists" in capsys.readouterr().err and calls[-1][3] == "val"
+def test_export_writes_the_format_and_says_what_it_wrote(dataset, tmp_path, capsys):
+    out = tmp_path / "mot"
+    assert main(["dataset", "export", str(dataset), "--format", "motchallenge", "--out", str(out),
+                 "--split", "val"]) == 0
+    printed = capsys.readouterr().out
+    assert printed.startswith(f"{out}: motchallenge, 1 episodes, ")
+    assert [p.relative_to(out).as_posix() for p in out.rglob("gt.txt")] == ["val/episode_00001/gt/gt.txt"]
+    assert main(["dataset", "export", str(dataset), "--format", "motchallenge", "--out", str(out)]) == 2
+    assert f"--out {out}" in capsys.readouterr().err
+    assert main(["dataset", "export", str(dataset), "--format", "motchallenge", "--laser", "front_laser",
+                 "--out", str(tmp_path / "x")]) == 2
+    assert "--laser" in capsys.readouterr().err and not (tmp_path / "x").exists()

@@ -28,11 +28,10 @@ import numpy as np
 
 from evaluation.detection import RADII, DetectionAccumulator, DetectionScores
 
-from .layout import DatasetError
+from .layout import FUSED, DatasetError
 from .reader import Dataset, Episode
 
 MIN_BEAMS = 6  # DR-SPAAM's JRDB rule: more than 5 points of the scan on the person
-FUSED = "fusion"  # the fused detections' detector name (episode.FUSED; not imported: episode.py imports the loop)
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ import pyarrow.parquet as pq
 
 from ..loop import Frame, Simulation
 from ..run import _without_unset
-from .layout import FORMAT_VERSION, calibration
+from .layout import FORMAT_VERSION, FUSED, calibration
 
 ROW_GROUP_FRAMES = 250  # tracking cycles a Parquet row group holds (10 s at 25 Hz)
 COMPRESSIONS = ("gzip", "lzf", "none")
@@ -120,7 +120,6 @@ TRACKS_SCHEMA = pa.schema([
     ("cov_yy", pa.float64()), ("is_matched", pa.bool_()), ("is_occluded", pa.bool_()), ("detection_id", pa.int64()),
     ("age", pa.float64()), ("world_x", pa.float64()), ("world_y", pa.float64()), ("world_vx", pa.float64()),
     ("world_vy", pa.float64())])
-FUSED = "fusion"  # the detector name of the fused detections, the tracker's input
 
 
 def _world(world_T_odom: np.ndarray, xy: np.ndarray) -> np.ndarray:

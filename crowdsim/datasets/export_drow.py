@@ -92,9 +92,9 @@ def _write_sequence(ep, laser: str, stem: Path) -> tuple[int, int]:
             frames, stamps = group["frame"][a:a + BLOCK], group["stamp"][a:a + BLOCK]
             ranges = group["ranges"][a:a + BLOCK].astype(np.float64)
             ranges[~(ranges <= NO_RETURN)] = NO_RETURN  # NaN (no return) and beyond
-            rows = slice(int(frames[0]), int(frames[-1]) + 1)
-            pose = robot["pose"][rows][frames - frames[0]]
-            odom = robot["odom"][rows][frames - frames[0]]
+            span = slice(int(frames[0]), int(frames[-1]) + 1)  # the robot's rows of these frames
+            pose = robot["pose"][span][frames - frames[0]]
+            odom = robot["odom"][span][frames - frames[0]]
             np.savetxt(files["csv"], np.column_stack([frames, stamps, ranges]), delimiter=",",
                        fmt=["%d", "%.6f"] + ["%.3f"] * BEAMS)
             sensor = compose(odom, np.array(mount))  # the laser's pose in odom
@@ -102,11 +102,11 @@ def _write_sequence(ep, laser: str, stem: Path) -> tuple[int, int]:
                        fmt=["%d", "%.6f", "%.4f", "%.4f", "%.5f"])
             person_id = group["person_id"][a:a + BLOCK]
             for k, frame in enumerate(frames):
-                rows_of = _advance(persons, int(frame))
+                persons_of = _advance(persons, int(frame))
                 ids, beams = np.unique(person_id[k][person_id[k] >= 0], return_counts=True)
-                seen = np.isin(rows_of["id"], ids[beams >= MIN_BEAMS])
-                xy = to_sensor(np.column_stack([rows_of["x"], rows_of["y"]])[seen], pose[k], mount)
-                kind = np.array([LABEL_FILE.get(t, "wp") for t in rows_of["agent_type"][seen]], dtype=object)
+                seen = np.isin(persons_of["id"], ids[beams >= MIN_BEAMS])
+                xy = to_sensor(np.column_stack([persons_of["x"], persons_of["y"]])[seen], pose[k], mount)
+                kind = np.array([LABEL_FILE.get(t, "wp") for t in persons_of["agent_type"][seen]], dtype=object)
                 for ext in ("wp", "wa", "wc"):
                     pick = xy[kind == ext]
                     polar = [[round(float(r), 4), round(float(p), 5)]

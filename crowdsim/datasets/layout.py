@@ -19,6 +19,7 @@ SPLITS = ("train", "val", "test")
 # the splits go by episode index, ten at a time: 8 of every 10 train, one val, one test (index 1 and 2 of each ten),
 # so that a dataset of 3 episodes has all three and a longer one keeps the first episodes' splits
 SPLIT_OF_INDEX = ("train", "val", "test", "train", "train", "train", "train", "train", "train", "train")
+FUSED = "fusion"  # detections.parquet's detector name for the fused detections, the tracker's input
 MINI_EPISODES = {"train": 2, "val": 1, "test": 1}  # the first episodes of each split that make up `mini`
 
 
