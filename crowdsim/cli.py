@@ -217,6 +217,28 @@ def _cmd_bench(args) -> int:
 def _cmd_experiment(args) -> int:
     from .outdir import check_out_dir, write_directory
 
+    if args.what == "train-detector":
+        return _cmd_train_detector(args)
+    if args.what == "table2":
+        from .experiments.table2 import report, table2
+
+        if args.seeds < 1:
+            raise UsageError(f"--seeds: expected at least 1, got {args.seeds}")
+        seeds = list(range(1, args.seeds + 1))
+        print(report(table2(seeds, args.duration, workers=args.workers), seeds))
+        return 0
+    if args.what == "tune":
+        try:
+            from .experiments.tune import tune
+        except ImportError as e:
+            raise UsageError(f"experiment tune: needs {e.name}: pip install -e \".[tune]\"") from None
+        out = Path(args.out) if args.out else Path("runs") / f"tune-{time.strftime('%Y%m%d-%H%M%S')}"
+        r = write_directory(out, lambda tmp: tune(tmp, args.trials, args.storage, duration=args.duration or 60.0,
+                                                  seed=args.seed))
+        print(f"{r['trials']} trials; best MOTA {r['best_train_mota']:.1f}% on the training seeds; held out: "
+              f"{r['held_out_mota_best']:.1f}% against the airport's own {r['held_out_mota_airport']:.1f}%; "
+              f"{out / 'best.yaml'}")
+        return 0
     if args.minutes <= 0:
         raise UsageError(f"--minutes: expected a time above 0, got {args.minutes}")
     out = Path(args.out) if args.out else Path("runs") / f"ppo-{time.strftime('%Y%m%d-%H%M%S')}"
@@ -232,6 +254,37 @@ def _cmd_experiment(args) -> int:
         print(f"{name:7s} on {e['episodes']} evaluation seeds: success {e['success_rate']:.0%}, collision "
               f"{e['collision_rate']:.0%}, timeout {e['timeout_rate']:.0%}, mean return {e['mean_return']:.2f}")
     print(f"learning curve: {out / 'learning_curve.png'}")
+    return 0
+
+
+def _cmd_train_detector(args) -> int:
+    from .outdir import check_out_dir, write_directory
+
+    if not 1 <= args.seeds <= 1000:
+        raise UsageError(f"--seeds: expected 1 to 1000 training seeds, got {args.seeds}")
+    if args.workers < 1:
+        raise UsageError(f"--workers: expected at least 1 process, got {args.workers}")
+    out = Path(args.out) if args.out else None
+    if out is not None:
+        check_out_dir(out)
+    try:
+        import sklearn  # noqa: F401
+    except ImportError:
+        raise UsageError('experiment train-detector needs scikit-learn, of the train extra: '
+                         'pip install -e ".[train]"') from None
+    from pipeline.detectors.learned_segments import MODELS_DIR
+
+    from .experiments.train_detector import save_models, train
+
+    t0 = time.perf_counter()
+    models, report = train(args.seeds, quick=args.quick, workers=args.workers)
+    if out is None:
+        paths = save_models(models, MODELS_DIR)
+    else:
+        paths = [out / p.name for p in write_directory(out, lambda tmp: save_models(models, tmp))]
+    print(report)
+    print(f"{time.perf_counter() - t0:.0f} s; models: " + ", ".join(f"{p} ({p.stat().st_size / 1024:.0f} KiB)"
+                                                                   for p in paths))
     return 0
 
 
@@ -372,15 +425,31 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--socnavgym", metavar="PYTHON", help="bench env: also time SocNavGym with this interpreter")
     p.add_argument("--socnavgym-config", metavar="FILE", help="bench env: the SocNavGym environment config to use")
     p.set_defaults(func=_cmd_bench)
-    p = sub.add_parser("experiment", help="experiments that take long: `experiment ppo` trains PPO on Navigate-v0")
-    p.add_argument("what", choices=("ppo",), help="ppo: stable-baselines3 PPO on crowdsim/Navigate-v0 with the "
-                                                  "tracks observation, against the random policy (needs [rl])")
+    p = sub.add_parser("experiment", help="experiments that take long: `experiment ppo` trains PPO on Navigate-v0, "
+                                          "`experiment train-detector` the laser_learned segment classifiers")
+    p.add_argument("what", choices=("ppo", "train-detector", "table2", "tune"),
+                   help="ppo: stable-baselines3 PPO on crowdsim/Navigate-v0 with the tracks observation, against "
+                        "the random policy (needs [rl]); train-detector: AdaBoost and random-forest segment "
+                        "classifiers on labelled airport scans, scored against laser_segments on held-out seeds "
+                        "(needs [train]); table2: seed 000's Table II on the airport over --seeds seeds (from 1), "
+                        "its claims checked; tune: Optuna over the pipeline's parameters for MOTA (needs [tune])")
     p.add_argument("--minutes", type=float, default=30.0, help="wall-clock training budget (default 30)")
     p.add_argument("--envs", type=int, default=8, help="environments stepped together (default 8)")
     p.add_argument("--people", type=int, default=10, help="people per environment (default 10)")
     p.add_argument("--seed", type=int, default=0, help="training seed (evaluation seeds are disjoint)")
     p.add_argument("--eval-episodes", type=int, default=100, help="evaluation episodes per policy (default 100)")
-    p.add_argument("--out", help="output directory (default runs/ppo-<time>); must be new or empty")
+    p.add_argument("--out", help="output directory (default runs/ppo-<time>; train-detector: the shipped models, "
+                                 "pipeline/detectors/models/, replaced); must be new or empty")
+    p.add_argument("--seeds", type=int, default=20, help="train-detector: training seeds, from 1000 (default 20); "
+                                                        "table2: seeds from 1")
+    p.add_argument("--duration", type=float, help="table2 and tune: s of each airport run (default: the "
+                                                  "scenario's; tune: 60)")
+    p.add_argument("--trials", type=int, default=50, help="tune: trials (default 50)")
+    p.add_argument("--storage", help="tune: an Optuna storage to keep and resume the study, e.g. sqlite:///study.db")
+    p.add_argument("--quick", action="store_true", help="train-detector: 4 short training seeds, 1 validation and "
+                                                        "1 test seed (a smoke test, not models to ship)")
+    p.add_argument("--workers", type=int, default=2, help="train-detector: processes running the simulations "
+                                                          "(default 2)")
     p.set_defaults(func=_cmd_experiment)
     p = sub.add_parser("dataset", help="labelled datasets: generate, export, evaluate-detector "
                                        "(docs/dataset-format.md)")

@@ -76,7 +76,8 @@ class Frame:
     target_visible: bool = False
     tag: TagReading | None = None
     collision: bool = False
-    # each detector's own output since the previous Frame (sensor -> its detections, odom), before the fusion
+    # each detector's own output since the previous Frame (sensor -> its detections, odom; after the map filter,
+    # when the pipeline has one), before the fusion
     detector_outputs: dict[str, DetectedPersons] = field(default_factory=dict)
 
 
@@ -109,7 +110,8 @@ class Simulation:
         self.max_range = scenario["evaluation"]["max_range"]
         self.dt = scenario["dt"]
         # the parts are made once (a user's may be costly to make) and start over at every reset
-        self.pipeline = build_pipeline(scenario["pipeline"], [laser["name"] for laser in sensors["lasers"]])
+        self.pipeline = build_pipeline(scenario["pipeline"], [laser["name"] for laser in sensors["lasers"]],
+                                       scenario["map"])
         robot = scenario["robot"]
         self.driver = robot["driver"]
         self.goals = np.asarray(robot["goals"] or np.zeros((0, 2)), float).reshape(-1, 2)
@@ -344,13 +346,17 @@ class Simulation:
 
     def _detect(self, data: LaserScan | DepthFrame | CameraFrame) -> None:
         """The sensor's detector, if it has one, on a frame the sensor made: its detections, brought into the
-        tracking frame, wait for the next tracking cycle (a sensor's latest replace its earlier ones)."""
+        tracking frame and, with a map filter, rid of those on the map (placed there through the localisation, as
+        the cameras are), wait for the next tracking cycle (a sensor's latest replace its earlier ones)."""
         detector = self.pipeline.detectors.get(data.frame)
         if detector is None:
             return
         laser = self._lasers_by_name.get(data.frame)
         pose = laser.pose_in(self.robot.odom_pose) if laser is not None else self._camera_in_odom(data.frame)
-        self._pending[data.frame] = to_frame(detector.detect(data), pose, TRACKING_FRAME)
+        detections = to_frame(detector.detect(data), pose, TRACKING_FRAME)
+        if self.pipeline.map_filter is not None:
+            detections = self.pipeline.map_filter.filter(detections, self.robot.world_T_odom)
+        self._pending[data.frame] = detections
 
     def _camera_in_odom(self, name: str) -> np.ndarray:
         """The camera's optical frame in odom (a 4x4 transform), placed through the robot's localisation in the map

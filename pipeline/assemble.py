@@ -14,7 +14,10 @@ from typing import Protocol, Sequence
 from scenarios.schema import import_class
 
 from .detectors.laser_segments import SegmentDetector
+from .detectors.learned_segments import LearnedSegmentDetector
 from .fusion import NearestFusion
+from .map_filter import MapFilter
+from .tracking.mht import MultiHypothesisTracker
 from .tracking.nnt import NearestNeighbourTracker
 from .types import CameraFrame, DepthFrame, DetectedPersons, LaserScan, TrackedPersons
 
@@ -45,18 +48,20 @@ class Tracker(Protocol):
     def reset(self) -> None: ...
 
 
-DETECTORS: dict[str, type] = {"laser_segments": SegmentDetector}
+DETECTORS: dict[str, type] = {"laser_segments": SegmentDetector, "laser_learned": LearnedSegmentDetector}
 FUSIONS: dict[str, type] = {"nearest": NearestFusion}
-TRACKERS: dict[str, type] = {"nnt": NearestNeighbourTracker}
+TRACKERS: dict[str, type] = {"nnt": NearestNeighbourTracker, "mht": MultiHypothesisTracker}
 
 
 @dataclass
 class Pipeline:
-    """The parts, made once: ``detectors`` by the name of the sensor each reads."""
+    """The parts, made once: ``detectors`` by the name of the sensor each reads; ``map_filter`` (None: none) drops
+    their detections on the static map before fusion."""
 
     detectors: dict[str, Detector]
     fusion: Fusion
     tracker: Tracker
+    map_filter: MapFilter | None = None
 
     def reset(self) -> None:
         """Every part starts over (ids, tracks, counters), as for a new run."""
@@ -71,10 +76,14 @@ def build_part(spec: dict, registry: dict[str, type]):
     return cls(**params)
 
 
-def build_pipeline(spec: dict, lasers: Sequence[str]) -> Pipeline:
+def build_pipeline(spec: dict, lasers: Sequence[str], floor_plan: dict | None = None) -> Pipeline:
     """The parts of a validated ``pipeline`` section: ``detector`` on each of ``lasers`` (sensor names), and each
-    sensor that ``detectors`` names gets its own detector in its place."""
+    sensor that ``detectors`` names gets its own detector in its place; the map filter, when the section has one,
+    on ``floor_plan`` (the scenario's ``map``: the map the robot localises in; None: no filter)."""
     own = spec["detectors"]
     detectors = {name: build_part(own.get(name, spec["detector"]), DETECTORS) for name in lasers}
     detectors |= {name: build_part(detector, DETECTORS) for name, detector in own.items() if name not in detectors}
-    return Pipeline(detectors, build_part(spec["fusion"], FUSIONS), build_part(spec["tracker"], TRACKERS))
+    map_filter = (MapFilter(floor_plan["walls"], floor_plan["obstacles"], **spec["map_filter"])
+                  if spec["map_filter"] is not None and floor_plan is not None else None)
+    return Pipeline(detectors, build_part(spec["fusion"], FUSIONS), build_part(spec["tracker"], TRACKERS),
+                    map_filter)

@@ -333,8 +333,22 @@ SEGMENT_DETECTOR = Schema({
                            doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)"),
 })
 
-DETECTOR_TYPES = {"laser_segments": SEGMENT_DETECTOR}
-DETECTOR_READS = {"laser_segments": "lasers"}  # the `sensors` list whose frames each built-in detector reads
+LEARNED_DETECTOR = Schema({
+    "model": F("str", "forest",
+               doc="adaboost (Arras et al. 2007's boosted stumps, seed 000 Sec. II-A), forest (15 trees of depth 10, "
+                   "seed 000 Sec. III-A: best there), or the path of a .json/.npz model `crowdsim experiment "
+                   "train-detector --out` wrote"),
+    "threshold": F("float", None, min=0.0, max=1.0, optional=True,
+                   doc="least person probability detected; left out: the model's own (peak F1 on validation seeds)"),
+    "jump_distance": F("float", 0.4, min=0.0, exclusive_min=True, doc="m, seed 000 Sec. 4.2: 0.4 m"),
+    "min_points": F("int", 3, min=1, doc="seed 000 Sec. IV-C: far echoes of fewer than 3 points are unreliable"),
+    "position_variance": F("float", 0.1, min=0.0, exclusive_min=True,
+                           doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)"),
+})
+
+DETECTOR_TYPES = {"laser_segments": SEGMENT_DETECTOR, "laser_learned": LEARNED_DETECTOR}
+# the `sensors` list whose frames each built-in detector reads
+DETECTOR_READS = {"laser_segments": "lasers", "laser_learned": "lasers"}
 
 NEAREST_FUSION = Schema({
     "distance": F("float", 0.4, min=0.0, doc="m, detections of two sensors nearer than this are one person"),
@@ -342,17 +356,92 @@ NEAREST_FUSION = Schema({
 
 FUSION_TYPES = {"nearest": NEAREST_FUSION}
 
+# the NNT's parts (pipeline/tracking/nnt.py TrackerParams says why each default; a test keeps them equal)
+NNT_MODEL = Schema({
+    "model": F("str", required=True, choices=("cv", "ca", "ct", "brownian"), doc="the motion model"),
+    "process_noise": F("float", required=True, min=0.0, doc="its q, as the tracker's process_noise"),
+    "turn_rate_noise": F("float", 1.0, min=0.0, doc="rad^2/s^3, ct only, as the tracker's turn_rate_noise"),
+})
+
 NNT = Schema({
     "process_noise": F("float", 0.267, min=0.0, exclusive_min=True,
-                       doc="m^2/s^3, q_L of seed 000 Eq. 2 (its IMM's manoeuvre level, Sec. V-D)"),
+                       doc="m^2/s^3, q_L of seed 000 Eq. 2 (its IMM's manoeuvre level, Sec. V-D); the white-noise "
+                           "density of the `motion` model's highest derivative (m^2/s^5 for ca, m^2/s for brownian)"),
     "gate_chi2": F("float", 13.82, min=0.0, exclusive_min=True, doc="Mahalanobis gate (chi2 0.999 for 2 dof)"),
-    "n_confirm": F("int", 3, min=1, doc="detections that confirm a new track"),
+    "n_confirm": F("int", 3, min=1, doc="detections that confirm a new track with initiation none"),
     "n_delete": F("int", 5, min=1, doc="misses that delete a confirmed track (seed 000 Sec. V-C: 5)"),
-    "n_delete_tentative": F("int", 2, min=1, doc="misses that delete an unconfirmed track"),
+    "n_delete_tentative": F("int", 2, min=1,
+                            doc="misses that delete an unconfirmed track (Alg. 1's n_miss,max + 1; seed 000: none)"),
+    "initial_velocity_variance": F("float", 1.0, min=0.0, exclusive_min=True, doc="m^2/s^2 of a new track"),
+    "association": F("str", "greedy", choices=("greedy", "global", "multi"),
+                     doc="greedy NN, global NN (Jonker-Volgenant) or NN with several tracks per detection "
+                         "(seed 000 Sec. II-B, V-A, Table II)"),
+    "initiation": F("str", "none", choices=("none", "base", "extended"),
+                    doc="track initiation logic: none (n_confirm detections), base (speed from the latest detection "
+                        "in [v_min, v_max]) or extended (from every earlier one), seed 000 Alg. 1, Sec. V-B"),
+    "n_min": F("int", 6, min=2, doc="detections that confirm a track with base/extended (seed 000 Sec. V-B: 6)"),
+    "v_min": F("float", 0.2, min=0.0, doc="m/s, slowest speed between a candidate's detections (Sec. V-B: 0.2)"),
+    "v_max": F("float", 2.0, min=0.0, exclusive_min=True,
+               doc="m/s, fastest speed between a candidate's detections (Sec. V-B: 2)"),
+    "position_slack": F("float", 0.1, min=0.0,
+                        doc="m, detection noise allowed beyond v_max * dt (seed 000: none; 99% of the cycle-to-cycle "
+                            "error changes of laser_segments on airport_disembarkation)"),
+    "deletion": F("str", "fixed", choices=("fixed", "young_mature"),
+                  doc="track deletion logic: fixed (n_delete) or young_mature (seed 000 Sec. III-C)"),
+    "n_delete_young": F("int", 20, min=1, doc="misses that delete a young track (seed 000 Sec. V-C: 20)"),
+    "n_delete_mature": F("int", 50, min=1, doc="misses that delete a mature track (seed 000 Sec. V-C: 50)"),
+    "mature_after": F("int", 100, min=1, doc="detections that make a track mature (seed 000 Sec. V-C: 100)"),
+    "motion": F("str", "cv", choices=("cv", "ca", "ct", "brownian", "imm"),
+                doc="motion model: constant velocity (seed 000 Eq. 1-2), constant acceleration, coordinated turn "
+                    "(EKF), Brownian, or an IMM of imm_models (Sec. III-A)"),
+    "turn_rate_noise": F("float", 1.0, min=0.0,
+                         doc="rad^2/s^3, white noise on the ct turn rate (seed 000: none; turns change by ~1 rad/s "
+                             "in ~1 s)"),
+    "imm_models": F(ListOf(F(NNT_MODEL), min_items=1),
+                    [{"model": "cv", "process_noise": 0.035, "turn_rate_noise": 1.0},
+                     {"model": "cv", "process_noise": 0.267, "turn_rate_noise": 1.0}],
+                    doc="the IMM's models (seed 000 Sec. V-D, Table II: cv with q 0.035 and cv with q 0.267)"),
+    "imm_transition": F(ListOf(F("float", min=0.0, max=1.0), min_items=1), [0.95, 0.05, 0.05, 0.95],
+                        doc="the IMM's Markov matrix, row-major, one row per imm_models entry, rows summing to 1: "
+                            "entry (i, j) is the chance that model i is followed by model j at the next cycle "
+                            "(seed 000: none; staying 0.95 keeps a mode for 0.8 s at 25 Hz)"),
+})
+
+MHT = Schema({
+    "process_noise": F("float", 0.267, min=0.0, exclusive_min=True,
+                       doc="m^2/s^3, q_L of the CV model: the NNT's (seed 000 Sec. IV-C)"),
+    "gate_chi2": F("float", 13.82, min=0.0, exclusive_min=True, doc="Mahalanobis gate (chi2 0.999 for 2 dof)"),
+    "p_det": F("float", 0.7, min=0.0, exclusive_min=True, max=1.0,
+               doc="probability a track is detected in a cycle (seed 000 Sec. IV-C)"),
+    "p_occ": F("float", 0.27, min=0.0, exclusive_min=True, max=1.0,
+               doc="probability a track is occluded in a cycle (seed 000 Sec. IV-C)"),
+    "p_del": F("float", 0.03, min=0.0, exclusive_min=True, max=1.0,
+               doc="probability a track is deleted in a cycle (seed 000 Sec. IV-C); p_det + p_occ + p_del = 1"),
+    "lambda_new": F("float", 0.005, min=0.0, exclusive_min=True,
+                    doc="1/(m^2 cycle), Poisson rate of new tracks (seed 000 Sec. IV-C)"),
+    "lambda_fal": F("float", 0.005, min=0.0, exclusive_min=True,
+                    doc="1/(m^2 cycle), Poisson rate of false alarms (seed 000 Sec. IV-C)"),
+    "n_scan": F("int", 30, min=1, doc="cycles of n-scanback pruning (seed 000 Sec. IV-C: 30)"),
+    "n_delete": F("int", 10, min=1, doc="cycles without a detection that delete a track (seed 000 Sec. IV-C: 10)"),
+    "max_hypotheses": F("int", 50, min=1,
+                        doc="hypotheses generated per cycle, in place of seed 000's t_max = 0.03 s so results do "
+                            "not depend on the machine (about 0.03 s with 80 people; pipeline/tracking/mht.py)"),
+    "n_confirm": F("int", 3, min=1, doc="detections before a track is output (the NNT's)"),
     "initial_velocity_variance": F("float", 1.0, min=0.0, exclusive_min=True, doc="m^2/s^2 of a new track"),
 })
 
-TRACKER_TYPES = {"nnt": NNT}
+TRACKER_TYPES = {"nnt": NNT, "mht": MHT}
+
+# seed 000 Sec. V-C's static-map filter (pipeline/map_filter.py; a test keeps these defaults equal to the class's)
+MAP_FILTER = Schema({
+    "resolution": F("float", 0.05, min=0.0, exclusive_min=True,
+                    doc="m, cell size of the occupancy grid made from the map (a common ROS map's; an assumption)"),
+    "inflation": F("float", 0.15, min=0.0,
+                   doc="m, radius of the circle checked round each detection (seed 000: 15 cm)"),
+    "max_occupied": F("float", 0.1, min=0.0, max=1.0,
+                      doc="share of the circle's cells that may be occupied (seed 000: rejected when under 90% free; "
+                          "0: any occupied cell rejects)"),
+})
 
 # the methods a class of one's own must have (pipeline/assemble.py's protocols; a test keeps them equal)
 DETECTOR = Typed(DETECTOR_TYPES, "laser_segments", "detector", ("detect", "reset"))
@@ -366,7 +455,11 @@ PIPELINE = Schema({
     "fusion": F(FUSION, doc="merges the detections of one cycle (nearest: seed 000's detection-to-detection fusion)"),
     "fusion_distance": F("float", None, min=0.0,
                          doc="the old spelling of fusion.distance, moved there when the file is loaded"),
-    "tracker": F(TRACKER, doc="the tracker (nnt: seed 000's nearest-neighbour Kalman tracker)"),
+    "tracker": F(TRACKER, doc="the tracker (nnt: seed 000's nearest-neighbour Kalman tracker; mht: its "
+                                  "multi-hypothesis baseline)"),
+    "map_filter": F(MAP_FILTER, optional=True,
+                    doc="drop every detector's detections on the map's walls and obstacles before fusion (seed 000 "
+                        "Sec. V-C); left out or null: none"),
 }, legacy={"fusion_distance": "fusion.distance"})
 
 EVALUATION = Schema({

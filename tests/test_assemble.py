@@ -112,8 +112,8 @@ def test_old_keys_give_todays_parts_and_the_resolved_section_reloads_equal(tmp_p
                      "max_width": 0.9, "min_bulge": 0.03, "position_variance": 0.1},
         "detectors": {},
         "fusion": {"type": "nearest", "distance": 0.3},
-        "tracker": {"type": "nnt", "process_noise": 0.267, "gate_chi2": 13.82, "n_confirm": 3, "n_delete": 25,
-                    "n_delete_tentative": 2, "initial_velocity_variance": 1.0}}
+        "map_filter": None,
+        "tracker": {"type": "nnt", **asdict(TrackerParams(n_delete=25))}}  # the NNT's defaults: test above
     parts = build_pipeline(sc["pipeline"], ["front_laser", "rear_laser"])
     front, rear = parts.detectors["front_laser"], parts.detectors["rear_laser"]
     assert type(front) is type(rear) is SegmentDetector and front is not rear  # each laser its own ids
@@ -211,7 +211,7 @@ def test_a_detector_on_a_camera_reads_its_images_and_its_detections_reach_odom()
 # --- errors: one, naming the file and the key --------------------------------------------------------------------
 
 @pytest.mark.parametrize("pipeline, key, words", [
-    ({"tracker": {"type": "nn"}}, "pipeline.tracker.type", ["expected one of nnt or module.path:ClassName", "'nn'"]),
+    ({"tracker": {"type": "nn"}}, "pipeline.tracker.type", ["expected one of nnt, mht or module.path:ClassName", "'nn'"]),
     ({"tracker": {"gate": 9.0}}, "pipeline.tracker.gate",
      ["unknown key; expected one of: type, process_noise, gate_chi2, n_confirm"]),
     ({"tracker": {"type": "test_assemble:EchoTracker", "gain": 2}}, "pipeline.tracker.gain",

@@ -4,16 +4,10 @@ import numpy as np
 import pytest
 
 from evaluation import ClearMot
-from pipeline.tracking.nnt import (
-    NearestNeighbourTracker,
-    TrackerParams,
-    greedy_assign,
-    kalman_update,
-    mahalanobis,
-    predict,
-    process_noise,
-    transition_matrix,
-)
+from pipeline.tracking.association import greedy_assign, mahalanobis
+from pipeline.tracking.imm import kalman_update
+from pipeline.tracking.motion import ConstantVelocity, state_layout
+from pipeline.tracking.nnt import NearestNeighbourTracker, TrackerParams
 from pipeline.types import DetectedPersons
 
 DT = 0.04  # 25 Hz
@@ -30,6 +24,11 @@ def dets(stamp, xy, sigma=0.05, frame="odom", first_id=0):
     cov[:, 2, 2] = 1e6
     return DetectedPersons(stamp, frame, "laser", np.arange(first_id, first_id + m, dtype=np.int64), pos, cov,
                            np.ones(m))
+
+
+def cv(q):
+    """The CV model (seed 000 Eq. 1-2) on the tracker's default state [x, y, vx, vy]."""
+    return ConstantVelocity(state_layout(["cv"]), q)
 
 
 def run(tracker, truth, rng, sigma):
@@ -63,19 +62,21 @@ def test_predict_matches_hand_worked_covariance():
         [0.2, 2.025, 0.4, 4.1],
     ])
     x = np.array([[1.0, 2.0, 3.0, -4.0]])
-    x_pred, P_pred = predict(x, P[None], 0.5, 0.2)
+    x_pred, P_pred = cv(0.2).predict(x, P[None], 0.5)
     np.testing.assert_allclose(P_pred[0], expected, atol=1e-12)
     np.testing.assert_allclose(x_pred[0], [2.5, 0.0, 3.0, -4.0], atol=1e-12)  # x + dt v
     # inputs untouched, and a batch of two gives each its own result
     np.testing.assert_array_equal(x, [[1.0, 2.0, 3.0, -4.0]])
-    _, P2 = predict(np.zeros((2, 4)), np.stack([P, np.eye(4)]), 0.5, 0.2)
+    _, P2 = cv(0.2).predict(np.zeros((2, 4)), np.stack([P, np.eye(4)]), 0.5)
     np.testing.assert_allclose(P2[0], expected, atol=1e-12)
-    np.testing.assert_allclose(P2[1], transition_matrix(0.5) @ transition_matrix(0.5).T + process_noise(0.5, 0.2))
+    F, Q = cv(0.2).matrices(0.5)
+    np.testing.assert_allclose(F, [[1, 0, 0.5, 0], [0, 1, 0, 0.5], [0, 0, 1, 0], [0, 0, 0, 1]])  # Eq. 1
+    np.testing.assert_allclose(P2[1], F @ F.T + Q)
 
 
 def test_process_noise_is_eq2():
     # dt = 1, q = 3: [[1/3, 1/2], [1/2, 1]] * 3 per axis
-    np.testing.assert_allclose(process_noise(1.0, 3.0),
+    np.testing.assert_allclose(cv(3.0).matrices(1.0)[1],
                                [[1, 0, 1.5, 0], [0, 1, 0, 1.5], [1.5, 0, 3, 0], [0, 1.5, 0, 3]])
 
 
@@ -100,9 +101,11 @@ def test_greedy_assign_takes_global_minimum_first():
     # with the gate below 8, row 1 stays unmatched
     r, c = greedy_assign(cost, 5.0)
     assert r.tolist() == [0] and c.tolist() == [0]
-    # priority: row 0 is tentative (1), row 1 confirmed (0) -> row 1 picks first: (1,0)=1.5, then (0,1)=2
-    r, c = greedy_assign(cost, 9.21, priority=np.array([1, 0]))
-    assert r.tolist() == [1, 0] and c.tolist() == [0, 1]
+    # the tracker lets confirmed tracks choose first: row 1 alone takes (1,0)=1.5, row 0 then gets column 1 (2)
+    r, c = greedy_assign(cost[1:], 9.21)
+    assert r.tolist() == [0] and c.tolist() == [0]
+    r, c = greedy_assign(cost[:1, 1:], 9.21)
+    assert r.tolist() == [0] and c.tolist() == [0]
     # ties go to the smaller (row, col)
     r, c = greedy_assign(np.ones((2, 2)), 9.21)
     assert r.tolist() == [0, 1] and c.tolist() == [0, 1]
@@ -119,6 +122,9 @@ def test_kalman_update_hand_worked():
     np.testing.assert_allclose(x_new[0], [1.0, -2.0, 0.5, -1.0])
     np.testing.assert_allclose(P_new[0], [[0.5, 0, 0.25, 0], [0, 0.5, 0, 0.25], [0.25, 0, 1.875, 0],
                                           [0, 0.25, 0, 1.875]])
+    # log N(nu; 0, S) + log(2 pi) = -(nu^T S^-1 nu + log det S) / 2 = -(20 / 2 + log 4) / 2
+    _, _, log_l = kalman_update(np.zeros((1, 4)), P[None], np.array([[2.0, -4.0]]), np.eye(2)[None], True)
+    np.testing.assert_allclose(log_l, [-(10.0 + np.log(4.0)) / 2])
 
 
 # ---------------------------------------------------------------------------------------------------------------

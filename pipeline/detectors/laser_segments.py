@@ -11,6 +11,8 @@ import numpy as np
 
 from pipeline.types import UNKNOWN_VARIANCE, DetectedPersons, LaserScan
 
+from .segment_features import jump_segments
+
 
 class SegmentDetector:
     """The ``laser_segments`` detector. Defaults: seed 000 Sec. 4.2 and IV-C (scenarios/format.py says which)."""
@@ -27,16 +29,8 @@ class SegmentDetector:
 
     def segments(self, scan: LaserScan) -> tuple[np.ndarray, np.ndarray]:
         """Per valid return, its segment label; and the valid returns' points [k, 2] (sensor frame)."""
-        pts = scan.points()
-        valid = scan.returned
-        idx = np.flatnonzero(valid)
-        p = pts[idx]
-        if len(p) == 0:
-            return np.zeros(0, np.int64), p
-        gap = np.linalg.norm(np.diff(p, axis=0), axis=1) > self.jump_distance
-        gap |= np.diff(idx) > 1  # a beam without return also splits
-        labels = np.concatenate([[0], np.cumsum(gap)])
-        return labels, p
+        seg = jump_segments(scan, self.jump_distance)
+        return seg.label, seg.points
 
     def detect(self, scan: LaserScan) -> DetectedPersons:
         labels, p = self.segments(scan)

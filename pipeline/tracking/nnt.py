@@ -1,42 +1,42 @@
-"""Nearest-neighbour people tracker on the ground plane (the SPENCER base NNT, seed 000 Sec. II-B, III-B/C, Table II).
+"""Nearest-neighbour people tracker on the ground plane (the SPENCER NNT, seed 000 Sec. II-B, III, V, Table II).
 
 Why: the testbed needs a fast, deterministic multi-person tracker that turns per-frame detections (already in the
 locally fixed tracking frame, e.g. ``odom``) into persistent person tracks with ids, so that CLEAR-MOT can score the
-perception pipeline. The seed paper's base tracker is a Kalman filter per person with a nearly-constant-velocity
-model and greedy nearest-neighbour data association on the Mahalanobis distance; it runs at kHz rates (Table II).
+perception pipeline. The seed paper's tracker is a Kalman filter per person with nearest-neighbour data association
+on the Mahalanobis distance, made robust in crowds by a few cheap extensions (Sec. III); it runs at kHz (Table II).
+Each part is chosen by the scenario (``TrackerParams``), so Table II's rows are configurations of this one tracker:
 
-Model (seed 000 Eq. 1-2), state ``[x, y, vx, vy]`` (the seed orders it ``[x, vx, y, vy]``; the model is the same):
+* motion model (``pipeline.tracking.motion``, ``.imm``): ``cv`` (Eq. 1-2), ``ca``, ``ct`` (an EKF), ``brownian``,
+  or ``imm`` over a list of them (Sec. III-A, V-D);
+* association (``pipeline.tracking.association``): ``greedy``, ``global``, ``multi`` (Sec. II-B, V-A);
+* initiation logic (``pipeline.tracking.initiation``): ``none``, ``base``, ``extended`` (Sec. III-B, Alg. 1, V-B);
+* deletion logic (``pipeline.tracking.deletion``): ``fixed``, ``young_mature`` (Sec. III-C, V-C).
 
-    x_k = F x_{k-1} + w,  F = [[I, t I], [0, I]],  w ~ N(0, Q),
-    Q = q_L [[t^3/3 I, t^2/2 I], [t^2/2 I, t I]]       (white-noise acceleration, q_L in m^2/s^3)
-    z_k = H x_k + v,      H = [I 0],                    v ~ N(0, R)  (R: the detection's x/y covariance)
+The defaults are the tracker as it was before these choices existed (CV, greedy, ``none``, ``fixed``): Table II's
+"Greedy NN" row with the settings ``TrackerParams`` explains. One cycle (``NearestNeighbourTracker.update``), every
+step batched over all tracks (a struct of numpy arrays with the tracks on the last axis, so that numpy's inner loops
+run over the tracks, not over 2 to 7 state components):
 
-One cycle (``NearestNeighbourTracker.update``), every step batched over all tracks (struct of numpy arrays):
-
-1. predict   -- ``predict``: x <- F x, P <- F P F^T + Q with dt = stamp - previous stamp.
-2. gate      -- ``mahalanobis``: d^2 = nu^T S^-1 nu for every (track, detection) pair, S = H P H^T + R;
-                pairs with d^2 > gate_chi2 are not allowed.
-3. associate -- ``greedy_assign``: greedy NN (seed 000 Table II "Greedy NN"): take the globally smallest gated cost,
-                assign, remove its row and column, repeat. Confirmed tracks choose first; tentative tracks
-                (initiation candidates) only get the detections left over, as in the seed's initiation logic
-                (Alg. 1 works on the unmatched detections Z^u). Implemented as one stable sort of the gated pairs by
-                (tentative, cost) and a single walk.
-4. update    -- ``kalman_update``: standard Kalman update of all matched tracks at once.
-5. misses    -- unmatched tracks coast on their prediction; the consecutive-miss counter grows. A confirmed track
-                is deleted after ``n_delete`` consecutive misses (seed 000 Sec. V-C: n_del = 5 in the base NNT), a
-                tentative one after ``n_delete_tentative``.
-6. initiate  -- every unmatched detection starts a tentative track at its position with zero velocity and
-                variance ``initial_velocity_variance``; a tentative track is confirmed once it has been matched by
-                ``n_confirm`` detections in all (the creating detection counts as the first; the seed's base
-                initiation logic, Sec. III-B, without its velocity gate).
+1. predict   -- the filter's prediction by dt = stamp - previous stamp (with an IMM: mixing first).
+2. gate      -- squared Mahalanobis distance of every (track, detection) pair from the track's combined estimate;
+                pairs beyond ``gate_chi2`` are not allowed.
+3. associate -- confirmed tracks choose by the configured association; initiation candidates (tentative tracks)
+                only get the detections left over (Alg. 1 works on the unmatched detections Z^u), by greedy NN and,
+                with an initiation logic, only those that pass its velocity gate.
+4. update    -- Kalman update of all matched tracks at once (each model's, with an IMM, and its mode probabilities).
+5. delete    -- unmatched tracks coast on their prediction; the consecutive-miss counter grows; the deletion logic
+                says when a track goes.
+6. initiate  -- every detection left over starts a candidate at its position with zero velocity and variance
+                ``initial_velocity_variance``; the initiation logic says when a candidate is confirmed.
 
 Choices:
 
 * Track ids are handed out from a counter starting at 1 **when a track is confirmed**, so output ids are
   consecutive (1, 2, 3, ...) and do not depend on how many false-alarm candidates came and went. A track keeps its
   id until it is deleted; ids are never reused (``reset`` restarts the counter).
-* ``age`` is the time since the track's first detection (its creation as a tentative track), in seconds.
-* Only confirmed tracks are output, sorted by track id. ``is_occluded`` is ``not is_matched``.
+* ``age`` is the time since the track's first detection (its creation as a candidate), in seconds.
+* Only confirmed tracks are output, sorted by track id, with the combined estimate (with an IMM, the
+  mode-weighted mixture's mean and covariance). ``is_occluded`` is ``not is_matched``.
 * Stamps must not decrease (ValueError); the first cycle (or one with equal stamp) does no prediction.
 * Detections must be in the tracker's frame, with finite x/y and a positive-definite x/y covariance (ValueError).
 * Ties in cost are broken by (track row, detection index), so results are deterministic; there is no randomness.
@@ -47,22 +47,22 @@ Choices:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from pipeline.types import DetectedPersons, TrackedPersons
 
-__all__ = [
-    "TrackerParams",
-    "NearestNeighbourTracker",
-    "transition_matrix",
-    "process_noise",
-    "predict",
-    "mahalanobis",
-    "greedy_assign",
-    "kalman_update",
-]
+from .association import ASSOCIATIONS, mahalanobis
+from .deletion import DELETIONS, DeletionLogic
+from .imm import IMM
+from .initiation import INITIATIONS, InitiationLogic
+from .motion import MODELS, make_model, state_layout
+
+__all__ = ["TrackerParams", "NearestNeighbourTracker", "bench_cycles"]
+
+TURN_RATE_NOISE = 1.0  # rad^2/s^3, the CT model's default (TrackerParams.turn_rate_noise says why)
 
 
 @dataclass
@@ -79,7 +79,8 @@ class TrackerParams:
     gave 19 / 51, q_L = 0.267 gave 9 / 21; the velocity RMSE hardly changed (0.21-0.25 m/s per axis).
     Cost: on a walker at exactly constant velocity the velocity estimate is noisier than with a small q_L (at
     25 Hz and sigma 0.02 m the filter's own per-axis velocity std is 0.17 m/s); use a smaller value (or an IMM)
-    where smooth velocities matter more than holding tracks through turns."""
+    where smooth velocities matter more than holding tracks through turns. With another single ``motion`` model,
+    the density of its own white noise (``pipeline.tracking.motion``: m^2/s^5 for ca, m^2/s for brownian)."""
 
     gate_chi2: float = 13.82
     """Mahalanobis gate on the 2D innovation: the chi-square 0.999 quantile for 2 degrees of freedom. The 0.99
@@ -101,115 +102,99 @@ class TrackerParams:
     """Per-axis velocity variance (m^2/s^2) of a new track, whose velocity is unknown. A walker at ~1.3 m/s with a
     uniformly random heading has E[vx^2] = 1.3^2 / 2 = 0.845 m^2/s^2; rounded up to 1.0 to cover faster walkers."""
 
+    association: str = "greedy"
+    """How confirmed tracks choose detections (``pipeline.tracking.association``): ``greedy``, ``global`` or
+    ``multi``. Greedy NN: the base NNT of seed 000 Table II, and within 0.1 % MOTA of the optimal global NN there
+    (Sec. V-A)."""
+
+    initiation: str = "none"
+    """Track initiation logic (``pipeline.tracking.initiation``): ``none`` (confirmed after ``n_confirm``
+    detections, no velocity gate: the base NNT), ``base`` or ``extended`` (seed 000 Alg. 1, Sec. V-B)."""
+
+    n_min: int = 6
+    """Detections that confirm a candidate under the ``base`` and ``extended`` logic (seed 000 Sec. V-B: 6)."""
+
+    v_min: float = 0.2
+    """m/s, slowest speed between a candidate's detections (seed 000 Sec. V-B: [v_min, v_max] = [0.2, 2])."""
+
+    v_max: float = 2.0
+    """m/s, fastest speed between a candidate's detections (seed 000 Sec. V-B: 2)."""
+
+    position_slack: float = 0.1
+    """m, detection noise allowed on top of v_max * dt by the velocity gate. Seed 000 gives no value. On
+    airport_disembarkation (laser_segments, 20 s, 15,000 detections) the error of a person's detection changed from
+    one cycle to the next by 1.6 cm (median), 4.9 cm (90 %) and 9.3 cm (99 %): 0.1 m lets 99 % of such steps through,
+    where a walker at 1.3 m/s moves only 5.2 cm per 25 Hz cycle."""
+
+    deletion: str = "fixed"
+    """Track deletion logic (``pipeline.tracking.deletion``): ``fixed`` (after ``n_delete`` misses) or
+    ``young_mature`` (seed 000 Sec. III-C)."""
+
+    n_delete_young: int = 20
+    """Consecutive misses that delete a young confirmed track under ``young_mature`` (seed 000 Sec. V-C: 20)."""
+
+    n_delete_mature: int = 50
+    """Consecutive misses that delete a mature track under ``young_mature`` (seed 000 Sec. V-C: 50)."""
+
+    mature_after: int = 100
+    """Detections over its life (the creating one included) that make a track mature (seed 000 Sec. V-C: 100)."""
+
+    motion: str = "cv"
+    """Motion model (``pipeline.tracking.motion``): ``cv`` (seed 000 Eq. 1-2), ``ca``, ``ct``, ``brownian``, each
+    with ``process_noise`` (and ``turn_rate_noise`` for ``ct``), or ``imm`` over ``imm_models``."""
+
+    turn_rate_noise: float = TURN_RATE_NOISE
+    """rad^2/s^3, density of the white noise on the CT model's turn rate. Seed 000 gives no value: a walker's turn
+    rate changes by about 1 rad/s within about 1 s (a corner), so 1.0."""
+
+    imm_models: list = field(default_factory=lambda: [
+        {"model": "cv", "process_noise": 0.035, "turn_rate_noise": TURN_RATE_NOISE},
+        {"model": "cv", "process_noise": 0.267, "turn_rate_noise": TURN_RATE_NOISE}])
+    """The IMM's models, each {model, process_noise, turn_rate_noise} as the single-model keys. Seed 000 Sec. V-D,
+    Table II "+IMM (CV + CV)": two CV models with q_L = 0.035 (walking) and 0.267 (manoeuvres)."""
+
+    imm_transition: list = field(default_factory=lambda: [0.95, 0.05, 0.05, 0.95])
+    """The IMM's Markov matrix, row-major: entry (i, j) is the probability that a person moving by model i at one
+    cycle moves by model j at the next; each row sums to 1. Seed 000 gives none: 0.95 to stay keeps a mode for 20
+    cycles (0.8 s at 25 Hz) on average, about as long as a walker's turn or stop."""
+
     def __post_init__(self) -> None:
         if not (self.process_noise >= 0.0 and np.isfinite(self.process_noise)):
             raise ValueError(f"process_noise must be finite and >= 0, got {self.process_noise}")
         if not self.gate_chi2 > 0.0:
             raise ValueError(f"gate_chi2 must be > 0, got {self.gate_chi2}")
-        for name in ("n_confirm", "n_delete", "n_delete_tentative"):
+        for name in ("n_confirm", "n_delete", "n_delete_tentative", "n_delete_young", "n_delete_mature",
+                     "mature_after"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
         if not (self.initial_velocity_variance > 0.0 and np.isfinite(self.initial_velocity_variance)):
             raise ValueError(f"initial_velocity_variance must be finite and > 0, got {self.initial_velocity_variance}")
-
-
-# ----------------------------------------------------------------------------------------------------------------
-# Small parts (pure functions, batched over tracks)
-# ----------------------------------------------------------------------------------------------------------------
-
-
-def transition_matrix(dt: float) -> np.ndarray:
-    """F of seed 000 Eq. 1 for the state [x, y, vx, vy] (4x4)."""
-    F = np.eye(4)
-    F[0, 2] = F[1, 3] = dt
-    return F
-
-
-def process_noise(dt: float, q: float) -> np.ndarray:
-    """Q of seed 000 Eq. 2 for the state [x, y, vx, vy] (4x4), white-noise acceleration of density q."""
-    a, b, c = q * dt**3 / 3.0, q * dt**2 / 2.0, q * dt
-    return np.array([[a, 0.0, b, 0.0], [0.0, a, 0.0, b], [b, 0.0, c, 0.0], [0.0, b, 0.0, c]])
-
-
-def predict(x: np.ndarray, P: np.ndarray, dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
-    """Constant-velocity prediction of n tracks: x [n, 4], P [n, 4, 4] -> (F x, F P F^T + Q), new arrays."""
-    F = transition_matrix(dt)
-    x_pred = x @ F.T
-    P_pred = F @ P @ F.T + process_noise(dt, q)
-    return x_pred, P_pred
-
-
-def mahalanobis(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray) -> np.ndarray:
-    """Squared Mahalanobis distance d^2[i, j] = nu^T S^-1 nu of every track i against every detection j.
-
-    x [n, 4], P [n, 4, 4] (predicted tracks), z [m, 2] positions, R [m, 2, 2] their covariances; returns [n, m].
-    nu = z_j - H x_i, S = H P_i H^T + R_j; the 2x2 inverse is written out in closed form.
-    """
-    nu0 = np.subtract.outer(x[:, 0], z[:, 0])  # sign of nu does not matter for d^2
-    nu1 = np.subtract.outer(x[:, 1], z[:, 1])
-    s00 = np.add.outer(P[:, 0, 0], R[:, 0, 0])
-    s11 = np.add.outer(P[:, 1, 1], R[:, 1, 1])
-    s01 = np.add.outer(P[:, 0, 1], 0.5 * (R[:, 0, 1] + R[:, 1, 0]))
-    d2 = s11 * nu0 * nu0
-    d2 -= 2.0 * s01 * nu0 * nu1
-    d2 += s00 * nu1 * nu1
-    det = s00 * s11
-    det -= s01 * s01
-    d2 /= det
-    return d2
-
-
-def greedy_assign(cost: np.ndarray, gate: float, priority: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Greedy nearest-neighbour assignment on cost [n, m]: returns (rows, cols) of the pairs, in the order taken.
-
-    Only pairs with cost <= gate are allowed. Pairs are taken in increasing cost, each row and column at most once
-    (seed 000 Table II "Greedy NN"). With ``priority`` [n] (smaller first), all gated pairs of priority-0 rows are
-    taken before any of priority-1 rows and so on. Ties go to the smaller (row, column).
-    """
-    n, m = cost.shape
-    if n == 0 or m == 0:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    rows, cols = np.nonzero(cost <= gate)  # row-major, so a stable sort breaks ties by (row, col)
-    c = cost[rows, cols]
-    order = np.argsort(c, kind="stable") if priority is None else np.lexsort((c, priority[rows]))
-    rows_l, cols_l = rows[order].tolist(), cols[order].tolist()
-    row_free = [True] * n
-    col_free = [True] * m
-    out_r: list[int] = []
-    out_c: list[int] = []
-    left = min(n, m)
-    for r, k in zip(rows_l, cols_l):
-        if row_free[r] and col_free[k]:
-            row_free[r] = False
-            col_free[k] = False
-            out_r.append(r)
-            out_c.append(k)
-            left -= 1
-            if left == 0:
-                break
-    return np.asarray(out_r, np.int64), np.asarray(out_c, np.int64)
-
-
-def kalman_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Kalman update of k tracks with one position measurement each: x [k, 4], P [k, 4, 4], z [k, 2], R [k, 2, 2].
-
-    nu = z - H x, S = H P H^T + R, K = P H^T S^-1, x+ = x + K nu, P+ = P - K S K^T (symmetrized). Returns new arrays.
-    """
-    nu = z - x[:, :2]
-    PHt = P[:, :, :2]  # [k, 4, 2]
-    S = P[:, :2, :2] + R
-    s00, s01, s10, s11 = S[:, 0, 0], S[:, 0, 1], S[:, 1, 0], S[:, 1, 1]
-    det = s00 * s11 - s01 * s10
-    Sinv = np.empty_like(S)
-    Sinv[:, 0, 0] = s11 / det
-    Sinv[:, 1, 1] = s00 / det
-    Sinv[:, 0, 1] = -s01 / det
-    Sinv[:, 1, 0] = -s10 / det
-    K = PHt @ Sinv  # [k, 4, 2]
-    x_new = x + (K @ nu[:, :, None])[:, :, 0]
-    P_new = P - K @ PHt.transpose(0, 2, 1)  # K S K^T = K H P = P H^T S^-1 H P
-    P_new = 0.5 * (P_new + P_new.transpose(0, 2, 1))
-    return x_new, P_new
+        for name, allowed in (("association", tuple(ASSOCIATIONS)), ("initiation", INITIATIONS),
+                              ("deletion", DELETIONS), ("motion", (*MODELS, "imm"))):
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"{name} must be one of {', '.join(allowed)}, got {getattr(self, name)!r}")
+        if int(self.n_min) < 2:
+            raise ValueError(f"n_min must be >= 2 (the velocity gate needs two detections), got {self.n_min}")
+        if not (0.0 <= self.v_min < self.v_max and np.isfinite(self.v_max)):
+            raise ValueError(f"need 0 <= v_min < v_max < inf, got v_min {self.v_min}, v_max {self.v_max}")
+        if not (self.position_slack >= 0.0 and np.isfinite(self.position_slack)):
+            raise ValueError(f"position_slack must be finite and >= 0, got {self.position_slack}")
+        if not (self.turn_rate_noise >= 0.0 and np.isfinite(self.turn_rate_noise)):
+            raise ValueError(f"turn_rate_noise must be finite and >= 0, got {self.turn_rate_noise}")
+        self.imm_models = [{"turn_rate_noise": TURN_RATE_NOISE, **m} for m in self.imm_models]
+        for i, m in enumerate(self.imm_models):
+            if set(m) != {"model", "process_noise", "turn_rate_noise"} or m["model"] not in MODELS:
+                raise ValueError(f"imm_models[{i}] must be {{model: one of {', '.join(MODELS)}, process_noise, "
+                                 f"turn_rate_noise (optional)}}, got {m!r}")
+            if not (m["process_noise"] >= 0.0 and m["turn_rate_noise"] >= 0.0):
+                raise ValueError(f"imm_models[{i}]: process_noise and turn_rate_noise must be >= 0, got {m!r}")
+        k = len(self.imm_models)
+        T = np.asarray(self.imm_transition, float)
+        if (k < 1 or T.shape != (k * k,) or not (T >= 0.0).all() or not np.allclose(T.reshape(k, k).sum(1), 1.0)
+                or not (T.reshape(k, k).sum(0) > 0.0).all()):
+            raise ValueError(f"imm_transition must be the {k} x {k} Markov matrix of the {k} imm_models, row-major "
+                             f"({k * k} numbers >= 0, each row of {k} summing to 1, each model reachable: a "
+                             f"positive entry in each column), got {self.imm_transition!r}")
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -218,33 +203,48 @@ def kalman_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray) ->
 
 
 class NearestNeighbourTracker:
-    """Greedy nearest-neighbour Kalman tracker; all track state lives in parallel numpy arrays (one row per track)."""
+    """Nearest-neighbour Kalman tracker; all track state lives in parallel numpy arrays, the tracks on their last
+    axis (a struct of arrays: the loops of every batched step run over the tracks)."""
 
     def __init__(self, frame: str = "odom", **params):
         """``params``: the keywords of ``TrackerParams`` (its defaults for those left out)."""
-        self.params = TrackerParams(**params)
+        self.params = p = TrackerParams(**params)
         self.frame = frame
+        single = {"model": p.motion, "process_noise": p.process_noise, "turn_rate_noise": p.turn_rate_noise}
+        specs = p.imm_models if p.motion == "imm" else [single]
+        layout = state_layout([s["model"] for s in specs])
+        models = [make_model(s["model"], layout, s["process_noise"], s["turn_rate_noise"]) for s in specs]
+        k = len(models)
+        self._filter = IMM(models, np.reshape(p.imm_transition, (k, k)) if p.motion == "imm" else None)
+        self._assign = ASSOCIATIONS[p.association]
+        self._initiation = InitiationLogic(p.initiation, p.n_confirm, p.n_min, p.v_min, p.v_max, p.position_slack)
+        self._deletion = DeletionLogic(p.deletion, p.n_delete, p.n_delete_tentative, p.n_delete_young,
+                                       p.n_delete_mature, p.mature_after)
         self.reset()
 
     # -- state --------------------------------------------------------------------------------------------------
 
     def reset(self) -> None:
         """Forget all tracks and the last stamp; the id counter restarts at 1."""
-        self._x = np.zeros((0, 4))  # [n, 4] state x, y, vx, vy
-        self._P = np.zeros((0, 4, 4))  # [n, 4, 4] covariance
-        self._id = np.zeros(0, np.int64)  # [n] track id, 0 while tentative
-        self._confirmed = np.zeros(0, bool)  # [n]
-        self._hits = np.zeros(0, np.int64)  # [n] detections matched over the lifetime (creating one included)
-        self._misses = np.zeros(0, np.int64)  # [n] consecutive cycles without a detection
-        self._created = np.zeros(0)  # [n] stamp of the first detection
-        self._det = np.zeros(0, np.int64)  # [n] detection id matched this cycle, -1 for none
+        L = self._initiation.history
+        self._t = {  # tracks last; every array selected and extended together
+            **self._filter.start(np.zeros((0, 2)), np.zeros((0, 2, 2)), 1.0),  # the filter's: x, P (, mu)
+            "id": np.zeros(0, np.int64),  # track id, 0 while a candidate
+            "confirmed": np.zeros(0, bool),
+            "hits": np.zeros(0, np.int64),  # detections matched over the lifetime (creating one included)
+            "misses": np.zeros(0, np.int64),  # consecutive cycles without a detection
+            "created": np.zeros(0),  # stamp of the first detection
+            "det": np.zeros(0, np.int64),  # detection id matched this cycle, -1 for none
+        }
+        if L:  # a candidate's detections (x, y) and their stamps, for the initiation logic's velocity gate
+            self._t["hist"] = np.zeros((3, L, 0))
         self._next_id = 1
         self._stamp: float | None = None
 
     @property
     def num_tracks(self) -> int:
-        """Tracks held, tentative ones included."""
-        return int(self._id.size)
+        """Tracks held, candidates included."""
+        return int(self._t["id"].size)
 
     # -- one cycle ----------------------------------------------------------------------------------------------
 
@@ -254,11 +254,12 @@ class NearestNeighbourTracker:
         stamp = float(stamp)
         dt = 0.0 if self._stamp is None else stamp - self._stamp
         self._stamp = stamp
-        if dt > 0.0 and self._id.size:
-            self._x, self._P = predict(self._x, self._P, dt, self.params.process_noise)
+        t = self._t
+        if dt > 0.0 and t["id"].size:
+            t |= self._filter.predict(t, dt)
 
-        rows, cols = self._associate(z, R)
-        self._update_matched(rows, cols, z, R, det_ids)
+        rows, cols = self._associate(stamp, z, R)
+        self._update_matched(stamp, rows, cols, z, R, det_ids)
         self._delete()
         self._initiate(stamp, cols, z, R, det_ids)
         self._confirm()
@@ -285,80 +286,125 @@ class NearestNeighbourTracker:
                 raise ValueError("detections: x/y covariance must be positive definite")
         return z, R, np.asarray(det.detection_id, np.int64)
 
-    def _associate(self, z: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Gate and greedily assign; confirmed tracks first, tentative tracks on the detections left over."""
-        if self._id.size == 0 or z.shape[0] == 0:
+    def _associate(self, stamp: float, z: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Gate; confirmed tracks choose by the configured association, candidates after them by greedy NN on what
+        is left (through the initiation logic's velocity gate, if it has one)."""
+        t, gate = self._t, self.params.gate_chi2
+        if t["id"].size == 0 or z.shape[0] == 0:
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        d2 = mahalanobis(self._x, self._P, z, R)
-        return greedy_assign(d2, self.params.gate_chi2, priority=(~self._confirmed).view(np.int8))
+        xy, Pxy = self._filter.estimate(t, 2)
+        d2 = mahalanobis(xy.T, Pxy.transpose(2, 0, 1), z, R)
+        later = ~t["confirmed"]
+        if not later.any():
+            return self._assign(d2, gate)
+        if self._initiation.history:  # the candidates' pairs within the gate must pass the velocity gate too
+            cand = np.flatnonzero(later)
+            r, c = np.nonzero(d2[cand] <= gate)
+            r = cand[r]
+            bad = ~self._initiation.velocity_ok(t["hist"].take(r, -1), t["hits"][r], z[c], stamp)
+            d2[r[bad], c[bad]] = np.inf
+        return self._assign(d2, gate, later)
 
-    def _update_matched(self, rows, cols, z, R, det_ids) -> None:
-        self._misses += 1
-        self._det = np.full(self._id.size, -1, np.int64)
+    def _update_matched(self, stamp, rows, cols, z, R, det_ids) -> None:
+        t = self._t
+        t["misses"] += 1
+        t["det"] = np.full(t["id"].size, -1, np.int64)
         if rows.size:
-            self._x[rows], self._P[rows] = kalman_update(self._x[rows], self._P[rows], z[cols], R[cols])
-            self._misses[rows] = 0
-            self._hits[rows] += 1
-            self._det[rows] = det_ids[cols]
+            for key, v in self._filter.update({key: t[key].take(rows, -1) for key in self._filter.keys}, z[cols],
+                                              R[cols]).items():
+                t[key][..., rows] = v
+            t["misses"][rows] = 0
+            if self._initiation.history:  # a candidate keeps its detections for the velocity gate
+                cand = ~t["confirmed"][rows]
+                r, k = rows[cand], t["hits"][rows[cand]]
+                t["hist"][:2, k, r] = z[cols[cand]].T
+                t["hist"][2, k, r] = stamp
+            t["hits"][rows] += 1
+            t["det"][rows] = det_ids[cols]
 
     def _delete(self) -> None:
-        p = self.params
-        limit = np.where(self._confirmed, p.n_delete, p.n_delete_tentative)
-        keep = self._misses < limit
+        t = self._t
+        keep = t["misses"] < self._deletion.limits(t["confirmed"], t["hits"])
         if not keep.all():
-            self._select(keep)
-
-    def _select(self, keep: np.ndarray) -> None:
-        self._x, self._P, self._id = self._x[keep], self._P[keep], self._id[keep]
-        self._confirmed, self._hits, self._misses = self._confirmed[keep], self._hits[keep], self._misses[keep]
-        self._created, self._det = self._created[keep], self._det[keep]
+            self._t = {key: v.compress(keep, -1) for key, v in t.items()}  # (v[..., keep] is tracks-first)
 
     def _initiate(self, stamp, used_cols, z, R, det_ids) -> None:
-        """A new tentative track for every detection no track took: position from it, velocity 0."""
-        m = z.shape[0]
-        free = np.ones(m, bool)
+        """A new candidate for every detection no track took: position from it, velocity 0."""
+        free = np.ones(z.shape[0], bool)
         free[used_cols] = False
         k = int(np.count_nonzero(free))
         if k == 0:
             return
-        x = np.zeros((k, 4))
-        x[:, :2] = z[free]
-        P = np.zeros((k, 4, 4))
-        P[:, :2, :2] = R[free]
-        P[:, 2, 2] = P[:, 3, 3] = self.params.initial_velocity_variance
-        self._x = np.concatenate([self._x, x])
-        self._P = np.concatenate([self._P, P])
-        self._id = np.concatenate([self._id, np.zeros(k, np.int64)])
-        self._confirmed = np.concatenate([self._confirmed, np.zeros(k, bool)])
-        self._hits = np.concatenate([self._hits, np.ones(k, np.int64)])
-        self._misses = np.concatenate([self._misses, np.zeros(k, np.int64)])
-        self._created = np.concatenate([self._created, np.full(k, stamp)])
-        self._det = np.concatenate([self._det, det_ids[free]])
+        new = {**self._filter.start(z[free], R[free], self.params.initial_velocity_variance),
+               "id": np.zeros(k, np.int64), "confirmed": np.zeros(k, bool), "hits": np.ones(k, np.int64),
+               "misses": np.zeros(k, np.int64), "created": np.full(k, stamp), "det": det_ids[free]}
+        L = self._initiation.history
+        if L:
+            new["hist"] = np.zeros((3, L, k))
+            new["hist"][:2, 0], new["hist"][2, 0] = z[free].T, stamp
+        self._t = {key: np.concatenate([v, new[key]], axis=-1) for key, v in self._t.items()}
 
     def _confirm(self) -> None:
-        """Tentative tracks with n_confirm detections become confirmed and get the next ids (in row order)."""
-        new = ~self._confirmed & (self._hits >= self.params.n_confirm)
+        """Candidates with the detections the initiation logic needs are confirmed and get the next ids (in row
+        order)."""
+        t = self._t
+        new = ~t["confirmed"] & (t["hits"] >= self._initiation.needed)
         k = int(np.count_nonzero(new))
         if k:
-            self._id[new] = np.arange(self._next_id, self._next_id + k)
+            t["id"][new] = np.arange(self._next_id, self._next_id + k)
             self._next_id += k
-            self._confirmed |= new
+            t["confirmed"] |= new
 
     def _output(self, stamp: float) -> TrackedPersons:
-        idx = np.flatnonzero(self._confirmed)
-        idx = idx[np.argsort(self._id[idx], kind="stable")]
-        x, P = self._x[idx], self._P[idx]
-        matched = self._misses[idx] == 0
+        t = self._t
+        idx = np.flatnonzero(t["confirmed"])
+        idx = idx[np.argsort(t["id"][idx], kind="stable")]
+        x, P = self._filter.estimate({key: t[key].take(idx, -1) for key in self._filter.keys}, 4)
+        matched = t["misses"][idx] == 0
         return TrackedPersons(
             stamp=stamp,
             frame=self.frame,
-            track_id=self._id[idx].copy(),
+            track_id=t["id"][idx].copy(),
             is_matched=matched,
             is_occluded=~matched,
-            detection_id=self._det[idx].copy(),
-            position=x[:, :2].copy(),
-            velocity=x[:, 2:].copy(),
-            position_covariance=P[:, :2, :2].copy(),
-            velocity_covariance=P[:, 2:, 2:].copy(),
-            age=stamp - self._created[idx],
+            detection_id=t["det"][idx].copy(),
+            position=x[:2].T.copy(),
+            velocity=x[2:4].T.copy(),
+            position_covariance=P[:2, :2].transpose(2, 0, 1).copy(),
+            velocity_covariance=P[2:4, 2:4].transpose(2, 0, 1).copy(),
+            age=stamp - t["created"][idx],
         )
+
+
+def bench_cycles(n_tracks: int, config: dict | None = None, miss_rate: float = 0.0, false_alarms: int = 0,
+                 cycles: int = 200, blocks: int = 5) -> float:
+    """Tracking cycles per second (median of ``blocks`` timed blocks of ``cycles``) of a tracker made with ``config``
+    (``TrackerParams`` keywords) on ``n_tracks`` people walking straight at 1.3 m/s in 30 x 30 m, detected at 25 Hz
+    with sigma 0.05 m (R = 0.1 m^2, seed 000 Sec. IV-C), each missed with probability ``miss_rate``, plus
+    ``false_alarms`` uniform false alarms per cycle. The detections are made before the clock starts, and the tracks
+    are confirmed in 50 untimed cycles first."""
+    rng = np.random.default_rng(0)
+    dt, warm = 0.04, 50
+    start = rng.uniform(0, 30, (n_tracks, 2))
+    heading = rng.uniform(-np.pi, np.pi, n_tracks)
+    vel = 1.3 * np.stack([np.cos(heading), np.sin(heading)], 1)
+    frames = []
+    for k in range(warm + cycles * blocks):
+        xy = start + vel * k * dt + rng.normal(0, 0.05, (n_tracks, 2))
+        xy = np.concatenate([xy[rng.random(n_tracks) >= miss_rate], rng.uniform(0, 30, (false_alarms, 2))])
+        m = len(xy)
+        cov = np.zeros((m, 3, 3))
+        cov[:, 0, 0] = cov[:, 1, 1] = 0.1
+        cov[:, 2, 2] = 1e6
+        pos = np.concatenate([xy, np.zeros((m, 1))], 1)
+        frames.append(DetectedPersons(k * dt, "odom", "laser2d", np.arange(m) + k * 1000, pos, cov, np.ones(m)))
+    tracker = NearestNeighbourTracker(**(config or {}))
+    for f in frames[:warm]:
+        tracker.update(f.stamp, f)
+    rates = []
+    for b in range(blocks):
+        t0 = time.perf_counter()
+        for f in frames[warm + b * cycles: warm + (b + 1) * cycles]:
+            tracker.update(f.stamp, f)
+        rates.append(cycles / (time.perf_counter() - t0))
+    return float(np.median(rates))

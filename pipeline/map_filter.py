@@ -1,0 +1,85 @@
+"""The static-map filter (seed 000 Sec. V-C, SPENCER's "filter detections by static map"): a detection on the map's
+walls and obstacles is no person, so it is dropped before fusion, whichever detector made it.
+
+A real robot has the occupancy grid it localises in; here it is rasterised once from the scenario's walls and
+obstacle polygons. Seed 000 rasterises a circle of 15 cm round each detection onto the grid and rejects the detection
+when less than 90% of the circle's cells are free; the grid here holds that test's answer for every cell (the share
+of occupied cells within ``inflation`` of its centre), so filtering a batch is one transform and one array lookup.
+Detections are in the tracking frame (odom); the robot's localisation in the map (world_T_odom) places them on it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import fftconvolve
+
+from scenarios.geometry import inside_polygon, wall_segments
+
+from .frames import transform_points
+from .types import DetectedPersons
+
+
+def occupancy_grid(walls: list, obstacles: list, resolution: float, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """The cells [rows (y), columns (x)] that ``walls`` (polylines) run through or ``obstacles`` (closed polygons,
+    solid) cover, over the map's bounding box grown by at least ``margin``, and the grid's lower corner (world, m)."""
+    segments = wall_segments({"map": {"walls": walls, "obstacles": obstacles}})
+    ends = segments.reshape(-1, 2) if len(segments) else np.zeros((1, 2))
+    # the lowest walls run through the middle of cells, not along their edges, where rounding would pick the side
+    origin = ends.min(axis=0) - (np.ceil(margin / resolution) + 0.5) * resolution
+    size = np.ceil((ends.max(axis=0) + margin - origin) / resolution).astype(int)  # columns, rows
+    occupied = np.zeros(size[::-1], bool)
+    # points a quarter cell apart along every segment mark the cells it crosses
+    length = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1)
+    count = np.ceil(length / (resolution / 4)).astype(int) + 1
+    seg = np.repeat(np.arange(len(segments)), count)
+    step = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+    t = step / np.repeat(np.maximum(count - 1, 1), count)
+    points = segments[seg, 0] + t[:, None] * (segments[seg, 1] - segments[seg, 0])
+    col, row = np.minimum(((points - origin) / resolution).astype(int), size - 1).T
+    occupied[row, col] = True
+    for poly in obstacles:  # an obstacle's inside too (a pillar is solid); once, when the grid is made
+        poly = np.asarray(poly, float)
+        lo = ((poly.min(axis=0) - origin) // resolution).astype(int)
+        hi = np.minimum(np.ceil((poly.max(axis=0) - origin) / resolution).astype(int), size)
+        cols, rows = np.meshgrid(np.arange(lo[0], hi[0]), np.arange(lo[1], hi[1]))
+        centres = origin + (np.stack([cols.ravel(), rows.ravel()], 1) + 0.5) * resolution
+        occupied[rows, cols] |= inside_polygon(centres, poly).reshape(rows.shape)
+    return occupied, origin
+
+
+class MapFilter:
+    """Drops detections whose circle of radius ``inflation`` holds more than ``max_occupied`` of occupied cells
+    (seed 000 Sec. V-C: a 15 cm circle, rejected when under 90% of it is free; ``max_occupied`` 0: any occupied
+    cell within ``inflation`` rejects). Detections off the grid (beyond the map) are kept: nothing is known there.
+    The map is a scenario's ``map``: ``walls`` (polylines) and ``obstacles`` (closed polygons), in the world frame."""
+
+    def __init__(self, walls: list, obstacles: list, resolution: float = 0.05, inflation: float = 0.15,
+                 max_occupied: float = 0.1):
+        self.resolution = resolution
+        self.occupied, self.origin = occupancy_grid(walls, obstacles, resolution, inflation + resolution)
+        r = int(np.floor(inflation / resolution + 1e-9))
+        offsets = np.arange(-r, r + 1) * resolution
+        disc = (np.hypot(*np.meshgrid(offsets, offsets)) <= inflation + 1e-9).astype(float)
+        # occupied cells within the circle of each cell, counted exactly (rounded off the FFT's float error)
+        near = np.rint(fftconvolve(self.occupied.astype(float), disc, mode="same"))
+        self.blocked = near > max_occupied * disc.sum() + 1e-9
+
+    def keep(self, xy_world: np.ndarray) -> np.ndarray:
+        """Which of the points [n, 2] (world) may be persons: off the blocked cells."""
+        cell = np.floor((xy_world - self.origin) / self.resolution).astype(int)
+        rows, cols = self.blocked.shape
+        on_grid = (cell[:, 0] >= 0) & (cell[:, 0] < cols) & (cell[:, 1] >= 0) & (cell[:, 1] < rows)
+        out = np.ones(len(xy_world), bool)
+        out[on_grid] = ~self.blocked[cell[on_grid, 1], cell[on_grid, 0]]
+        return out
+
+    def filter(self, detections: DetectedPersons, world_T_odom: np.ndarray) -> DetectedPersons:
+        """The detections (in odom) that are not on the map, placed on it through the localisation
+        ``world_T_odom`` (x, y, yaw of odom in the world)."""
+        keep = self.keep(transform_points(world_T_odom, detections.position[:, :2]))
+        if keep.all():
+            return detections
+        d = detections
+        originals = None if d.originals is None else {k: v[keep] for k, v in d.originals.items()}
+        return DetectedPersons(d.stamp, d.frame, d.modality, d.detection_id[keep], d.position[keep],
+                               d.covariance[keep], d.confidence[keep], originals)

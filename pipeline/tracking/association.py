@@ -1,0 +1,127 @@
+"""Gating and data association of the people tracker (seed 000 Sec. II-B "Data association", Sec. V-A, Table II).
+
+The cost of pairing track i with detection j is the squared Mahalanobis distance of the detection from the track's
+predicted position; pairs costing more than the gate are not allowed. Three ways to choose pairs, as in Table II:
+
+* ``greedy`` (Greedy NN): take the cheapest allowed pair, drop its row and column, repeat.
+* ``global`` (Global NN): the assignment of least total cost, solved by Jonker-Volgenant (scipy's
+  ``linear_sum_assignment``). Leaving a track without a detection costs the gate, the standard non-assignment
+  cost of global nearest neighbour, so no pair beyond the gate is ever taken and no far pair is forced on a track
+  to make room for another.
+* ``multi`` (NN with multiple associations per detection): every track takes its nearest allowed detection, even one
+  another track took. Seed 000 Sec. V-A: more MOTA, more ID switches, since a track that lost its person converges
+  onto a neighbour and duplicates its track.
+
+Each returns (rows, cols), the pairs taken, deterministically (greedy and multi break ties by the smaller row,
+then column). Each takes ``later`` [n] bool too: rows that choose only after all the others, by greedy NN from the
+columns left (the tracker's initiation candidates, which seed 000 Alg. 1 gives the detections no track took, Z^u).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+__all__ = ["ASSOCIATIONS", "mahalanobis", "greedy_assign", "global_assign", "multi_assign"]
+
+
+def mahalanobis(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """Squared Mahalanobis distance d^2[i, j] = nu^T S^-1 nu of every track i against every detection j.
+
+    x [n, >=2], P [n, >=2, >=2] (predicted tracks; position first), z [m, 2] positions, R [m, 2, 2] their
+    covariances; returns [n, m]. nu = z_j - H x_i, S = H P_i H^T + R_j; the 2x2 inverse is written out in closed form.
+    """
+    nu0 = np.subtract.outer(x[:, 0], z[:, 0])  # sign of nu does not matter for d^2
+    nu1 = np.subtract.outer(x[:, 1], z[:, 1])
+    s00 = np.add.outer(P[:, 0, 0], R[:, 0, 0])
+    s11 = np.add.outer(P[:, 1, 1], R[:, 1, 1])
+    s01 = np.add.outer(P[:, 0, 1], 0.5 * (R[:, 0, 1] + R[:, 1, 0]))
+    d2 = s11 * nu0 * nu0
+    d2 -= 2.0 * s01 * nu0 * nu1
+    d2 += s00 * nu1 * nu1
+    det = s00 * s11
+    det -= s01 * s01
+    d2 /= det
+    return d2
+
+
+def _none() -> tuple[np.ndarray, np.ndarray]:
+    return np.zeros(0, np.int64), np.zeros(0, np.int64)
+
+
+def greedy_assign(cost: np.ndarray, gate: float, later: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Greedy NN on cost [n, m]: pairs with cost <= gate taken in increasing cost (the ``later`` rows' pairs after all
+    others), each row and column at most once; returned in the order taken. One sort of the allowed pairs and a
+    single walk."""
+    n, m = cost.shape
+    if n == 0 or m == 0:
+        return _none()
+    rows, cols = np.nonzero(cost <= gate)  # row-major, so a stable sort breaks ties by (row, col)
+    order = np.argsort(cost[rows, cols], kind="stable")
+    if later is not None:  # then the later rows' pairs behind the others, each part still by cost
+        order = order[np.argsort(later[rows[order]], kind="stable")]
+    row_free = [True] * n
+    col_free = [True] * m
+    out_r: list[int] = []
+    out_c: list[int] = []
+    left = min(n, m)
+    for r, k in zip(rows[order].tolist(), cols[order].tolist()):
+        if row_free[r] and col_free[k]:
+            row_free[r] = col_free[k] = False
+            out_r.append(r)
+            out_c.append(k)
+            left -= 1
+            if left == 0:
+                break
+    return np.asarray(out_r, np.int64), np.asarray(out_c, np.int64)
+
+
+def _then_greedy(assign):
+    """The association ``assign`` for the rows not ``later``, then greedy NN for those on the columns left."""
+
+    @functools.wraps(assign)
+    def with_later(cost: np.ndarray, gate: float, later: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        if later is None or not later.any():
+            return assign(cost, gate)
+        first, cand = np.flatnonzero(~later), np.flatnonzero(later)
+        rows, cols = assign(cost[first], gate)
+        rest = cost[cand]
+        rest[:, cols] = np.inf
+        r, c = greedy_assign(rest, gate)
+        return np.concatenate([first[rows], cand[r]]), np.concatenate([cols, c])
+
+    return with_later
+
+
+@_then_greedy
+def global_assign(cost: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndarray]:
+    """Global NN on cost [n, m]: the pairs (cost <= gate) of least sum(cost) + gate * (rows left without a pair).
+
+    Written as one rectangular assignment on cost - gate for allowed pairs and 0 otherwise: a pair costing 0 is the
+    same as no pair, so the solver's complete assignment is the best partial one; its 0-cost pairs are dropped.
+    Returned by row (the ``later`` rows' pairs after the others).
+    """
+    n, m = cost.shape
+    if n == 0 or m == 0:
+        return _none()
+    allowed = cost <= gate
+    rows, cols = linear_sum_assignment(np.where(allowed, cost - gate, 0.0))
+    keep = allowed[rows, cols]
+    return rows[keep].astype(np.int64), cols[keep].astype(np.int64)
+
+
+@_then_greedy
+def multi_assign(cost: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndarray]:
+    """NN with multiple associations per detection on cost [n, m]: each row its cheapest column with cost <= gate,
+    whether or not other rows took it. Returned by row (the ``later`` rows' pairs after the others)."""
+    n, m = cost.shape
+    if n == 0 or m == 0:
+        return _none()
+    cols = np.argmin(cost, axis=1)  # the first of equal minima: the smaller column
+    rows = np.flatnonzero(cost[np.arange(n), cols] <= gate)
+    return rows.astype(np.int64), cols[rows].astype(np.int64)
+
+
+ASSOCIATIONS = {"greedy": greedy_assign, "global": global_assign, "multi": multi_assign}

@@ -1,0 +1,126 @@
+"""The tracker's filter: one motion model (a Kalman filter, extended for CT) or an IMM over several (seed 000 Sec.
+III-A and V-D; Blom & Bar-Shalom 1988, "The interacting multiple model algorithm for systems with Markovian switching
+coefficients").
+
+Why an IMM: one process-noise level is a compromise between smooth estimates of walkers and holding tracks through
+turns and stops (seed 000 Sec. III-A); the IMM runs one filter per model and weighs them by how well each predicted
+the detections, switching between them with a Markov chain. Table II's IMM is two CV models, q = 0.035 and 0.267.
+
+All tracks at once, as a struct of arrays with the components first and the tracks last (numpy is fast on long inner
+loops, slow on loops of 2 to 7): x [d, M, n] (each track's estimate under each of the M models), P [d, d, M, n], mode
+probabilities mu [M, n]. With M = 1 there is no mixing and no mode probability: the plain (extended) Kalman filter.
+The measurement is the position: H = [I 0], z = H x + v, v ~ N(0, R).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .motion import INITIAL_VARIANCE
+
+__all__ = ["IMM", "kalman_update", "kalman_update_soa"]
+
+
+def kalman_update_soa(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray,
+                      log_likelihood: bool = False) -> tuple[np.ndarray, ...]:
+    """Kalman update with one position measurement each, components first: x [d, ...], P [d, d, ...], z [2, ...],
+    R [2, 2, ...] (the trailing axes broadcast).
+
+    nu = z - H x, S = H P H^T + R, K = P H^T S^-1, x+ = x + K nu, P+ = P - K H P (symmetrized), all written out for
+    H = [I 0] and the 2 x 2 S. Returns new (x+, P+), and with ``log_likelihood`` also log N(nu; 0, S) + log(2 pi),
+    from which the IMM weighs its models.
+    """
+    nu0, nu1 = z[0] - x[0], z[1] - x[1]
+    s00, s01, s10, s11 = P[0, 0] + R[0, 0], P[0, 1] + R[0, 1], P[1, 0] + R[1, 0], P[1, 1] + R[1, 1]
+    det = s00 * s11 - s01 * s10
+    a, b = (s11 * nu0 - s01 * nu1) / det, (s00 * nu1 - s10 * nu0) / det  # S^-1 nu
+    p0, p1 = P[:, 0], P[:, 1]  # the columns of P H^T
+    x_new = x + p0 * a + p1 * b
+    k0, k1 = (p0 * s11 - p1 * s10) / det, (p1 * s00 - p0 * s01) / det  # the columns of K
+    P_new = P - k0[:, None] * P[0][None] - k1[:, None] * P[1][None]
+    P_new = 0.5 * (P_new + P_new.swapaxes(0, 1))
+    if not log_likelihood:
+        return x_new, P_new
+    return x_new, P_new, -0.5 * (nu0 * a + nu1 * b + np.log(det))
+
+
+def kalman_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray,
+                  log_likelihood: bool = False) -> tuple[np.ndarray, ...]:
+    """``kalman_update_soa`` on one row per track: x [..., d], P [..., d, d], z [..., 2], R [..., 2, 2]."""
+    out = kalman_update_soa(np.moveaxis(x, -1, 0), np.moveaxis(P, (-2, -1), (0, 1)), np.moveaxis(z, -1, 0),
+                            np.moveaxis(R, (-2, -1), (0, 1)), log_likelihood)
+    rows = (np.moveaxis(out[0], 0, -1), np.moveaxis(out[1], (0, 1), (-2, -1))) + out[2:]
+    return tuple(np.ascontiguousarray(v) for v in rows)
+
+
+class IMM:
+    """The filter of M motion models (``pipeline.tracking.motion``) on one state layout; ``transition`` [M, M] is
+    the Markov matrix p_ij = P(model j at this cycle | model i at the last), rows summing to 1 (None when M = 1).
+
+    The tracks' filter state is a dict of arrays, tracks last, the names ``keys``: x [d, M, n], P [d, d, M, n] and,
+    with M > 1, the mode probabilities mu [M, n]. Every method returns new arrays.
+    """
+
+    def __init__(self, models: list, transition: np.ndarray | None = None):
+        self.models = models
+        self.layout = models[0].layout
+        self.M, self.d = len(models), len(self.layout)
+        self.transition = None if transition is None else np.asarray(transition, float)
+        self.keys = ("x", "P", "mu") if self.M > 1 else ("x", "P")
+
+    def start(self, z: np.ndarray, R: np.ndarray, velocity_variance: float) -> dict:
+        """k new tracks at the positions z [k, 2] (covariances R [k, 2, 2]), everything else 0 with its initial
+        variance; every model starts from the same estimate, the mode probabilities uniform."""
+        k, M, d = z.shape[0], self.M, self.d
+        x = np.zeros((d, M, k))
+        x[:2] = z.T[:, None]
+        P = np.zeros((d, d, M, k))
+        P[:2, :2] = R.transpose(1, 2, 0)[:, :, None]
+        P[2, 2] = P[3, 3] = velocity_variance
+        for i, c in enumerate(self.layout[4:], start=4):
+            P[i, i] = INITIAL_VARIANCE[c]
+        return {"x": x, "P": P, "mu": np.full((M, k), 1.0 / M)} if M > 1 else {"x": x, "P": P}
+
+    def predict(self, s: dict, dt: float) -> dict:
+        """One cycle ahead by dt > 0: the IMM's interaction (mixing) step, then each model's own prediction from
+        its mixed estimate; mu becomes the predicted mode probabilities c_j = sum_i mu_i p_ij."""
+        if self.M == 1:
+            x, P = self.models[0].predict_soa(s["x"][:, 0], s["P"][:, :, 0], dt)
+            return {"x": x[:, None], "P": P[:, :, None]}
+        mu, T = s["mu"], self.transition
+        c = T.T @ mu
+        w = T[:, :, None] * mu[:, None] / c[None]  # [i, j, n]: P(model i before | model j now)
+        x0, P0 = _mix(w.transpose(1, 0, 2), s["x"], s["P"])
+        x, P = np.empty_like(x0), np.empty_like(P0)
+        for j, m in enumerate(self.models):
+            x[:, j], P[:, :, j] = m.predict_soa(x0[:, j], P0[:, :, j], dt)
+        return {"x": x, "P": P, "mu": c}
+
+    def estimate(self, s: dict, k: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The combined estimate handed out (and gated on) of the first k state components (all by default): the
+        mode-weighted mean and covariance, [k, n], [k, k, n]."""
+        if self.M == 1:
+            return s["x"][:k, 0], s["P"][:k, :k, 0]
+        xc, Pc = _mix(s["mu"][None], s["x"][:k], s["P"][:k, :k])
+        return xc[:, 0], Pc[:, :, 0]
+
+    def update(self, s: dict, z: np.ndarray, R: np.ndarray) -> dict:
+        """Each model's Kalman update of the tracks with their detections z [n, 2], R [n, 2, 2]; the mode
+        probabilities become mu_j ~ c_j N(nu_j; 0, S_j)."""
+        z, R = np.ascontiguousarray(z.T), np.ascontiguousarray(R.transpose(1, 2, 0))  # tracks last, as the state
+        if self.M == 1:
+            x, P = kalman_update_soa(s["x"][:, 0], s["P"][:, :, 0], z, R)
+            return {"x": x[:, None], "P": P[:, :, None]}
+        x, P, log_l = kalman_update_soa(s["x"], s["P"], z[:, None], R[:, :, None], log_likelihood=True)
+        # relative to the best model, and floored, so that no probability underflows to 0 (nor the sum to 0)
+        post = s["mu"] * np.exp(np.maximum(log_l - log_l.max(axis=0), -700.0))
+        return {"x": x, "P": P, "mu": post / post.sum(axis=0)}
+
+
+def _mix(weights: np.ndarray, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Gaussian mixtures reduced to their moments: for each output j, sum_i weights[j, i] of the components
+    (x[:, i], P[:, :, i]), spread of the means included. weights [J, M, n], x [d, M, n], P [d, d, M, n] -> [d, J, n],
+    [d, d, J, n]."""
+    xm = np.einsum("jmn,dmn->djn", weights, x)
+    dx = x[:, None] - xm[:, :, None]  # [d, J, M, n]
+    return xm, np.einsum("jmn,abmn->abjn", weights, P) + np.einsum("ajmn,bjmn->abjn", weights * dx, dx)

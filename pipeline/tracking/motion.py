@@ -1,0 +1,167 @@
+"""Motion models of the people tracker (seed 000 Sec. II-B Eq. 1-2 and Sec. III-A): nearly constant velocity (CV),
+nearly constant acceleration (CA), nearly coordinated turn (CT, an extended Kalman filter) and Brownian motion.
+
+Why a shared state: an IMM mixes the estimates of its models, which needs one state space for all of them. The
+tracker's state is the union of what its models use, in the order ``COMPONENTS``: position and velocity always (the
+tracker hands out both), the acceleration ``ax, ay`` when a CA model is among them, the turn rate ``w`` when a CT
+model is. A component a model does not have is zero under that model, with zero variance: a CV person does not
+accelerate or turn, a Brownian one does not walk. Every model predicts all tracks at once, held as a struct of
+arrays with the tracks last (x [d, n], P [d, d, n]: numpy is fast on long inner loops, slow on loops of 2 to 7).
+
+Process noise is white noise of density ``q`` (the seed's q_L) on the highest derivative each model has:
+acceleration for CV and CT (m^2/s^3, Eq. 2), jerk for CA (m^2/s^5), velocity for Brownian motion (m^2/s); the CT
+turn rate takes its own density ``q_turn`` (rad^2/s^3).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["COMPONENTS", "MODELS", "INITIAL_VARIANCE", "state_layout", "make_model", "ConstantVelocity",
+           "ConstantAcceleration", "CoordinatedTurn", "Brownian"]
+
+COMPONENTS = ("x", "y", "vx", "vy", "ax", "ay", "w")
+
+INITIAL_VARIANCE = {"ax": 1.0, "ay": 1.0, "w": 1.0}
+"""Variance of a new track's acceleration (m^2/s^4) and turn rate (rad^2/s^2), both started at 0. Seed 000 gives
+none: walkers start, stop and turn with accelerations of the order of 1 m/s^2 and turn rates of the order of 1 rad/s
+(a corner taken in 1.5 s), so 1.0 for both."""
+
+
+def state_layout(kinds) -> tuple[str, ...]:
+    """The state components the models ``kinds`` (names of ``MODELS``) need, in ``COMPONENTS`` order."""
+    extra = {"ax", "ay"} if "ca" in kinds else set()
+    extra |= {"w"} if "ct" in kinds else set()
+    return tuple(c for c in COMPONENTS if c in ("x", "y", "vx", "vy") or c in extra)
+
+
+def _pattern(layout: tuple[str, ...], blocks) -> np.ndarray:
+    """A d x d 0/1 matrix on ``layout``: for each (rows, cols) of ``blocks``, 1 at the x-axis pair (rows[0], cols[0])
+    and at the y-axis pair (rows[1], cols[1])."""
+    M = np.zeros((len(layout), len(layout)))
+    for rows, cols in blocks:
+        for r, c in zip(rows, cols):
+            M[layout.index(r), layout.index(c)] = 1.0
+    return M
+
+
+P_, V_, A_ = ("x", "y"), ("vx", "vy"), ("ax", "ay")
+
+
+class _Model:
+    """A motion model predicts tracks held as a struct of arrays, components first and tracks last (``predict_soa``:
+    the tracker's layout, where every numpy loop runs over the tracks); ``predict`` takes one row per track."""
+
+    def predict(self, x: np.ndarray, P: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """Prediction of n tracks by dt: x [n, d], P [n, d, d] -> new arrays."""
+        x1, P1 = self.predict_soa(x.T, P.transpose(1, 2, 0), dt)
+        return np.ascontiguousarray(x1.T), np.ascontiguousarray(P1.transpose(2, 0, 1))
+
+
+class _Linear(_Model):
+    """x <- F x, P <- F P F^T + Q with F = sum dt^p / c F_k and Q = q sum dt^p / c Q_k over the model's ``F_TERMS``
+    and ``Q_TERMS`` (p, c, blocks), each F_k, Q_k a 0/1 pattern of blocks (disjoint within F and within Q). F, Q
+    and F (x) F are kept for the last dt (the cycles of one sensor mostly repeat it)."""
+
+    F_TERMS: tuple
+    Q_TERMS: tuple
+
+    def __init__(self, layout: tuple[str, ...], q: float):
+        self.layout, self.q = layout, float(q)
+        # F and Q flattened = pattern matrix @ (dt^p / c for each term): one product each per new dt
+        self._terms = [(np.array([p for p, _, _ in terms]), np.array([c for _, c, _ in terms]),
+                        np.stack([_pattern(layout, blocks).ravel() for _, _, blocks in terms], 1))
+                       for terms in (self.F_TERMS, self.Q_TERMS)]
+        self._dt: float | None = None
+
+    def matrices(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """(F, Q) for a step of dt."""
+        d = len(self.layout)
+        (pf, cf, F), (pq, cq, Q) = self._terms
+        return (F @ (dt**pf / cf)).reshape(d, d), (Q @ (self.q * dt**pq / cq)).reshape(d, d)
+
+    def predict_soa(self, x: np.ndarray, P: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """Prediction of n tracks by dt: x [d, n], P [d, d, n] -> new arrays. F P F^T is one product for all tracks,
+        (F (x) F) vec(P)."""
+        if dt != self._dt:
+            F, Q = self.matrices(dt)
+            FF = (F[:, None, :, None] * F[None, :, None, :]).reshape(F.size, F.size)  # np.kron(F, F), sooner
+            self._F, self._FF, self._Q, self._dt = F, FF, Q.reshape(-1, 1), dt
+        d, n = x.shape
+        return self._F @ x, (self._FF @ P.reshape(d * d, n) + self._Q).reshape(d, d, n)
+
+
+class ConstantVelocity(_Linear):
+    """Seed 000 Eq. 1-2: position moves with the velocity; white-noise acceleration of density q (m^2/s^3)."""
+
+    F_TERMS = ((0, 1.0, [(P_, P_), (V_, V_)]), (1, 1.0, [(P_, V_)]))
+    Q_TERMS = ((3, 3.0, [(P_, P_)]), (2, 2.0, [(P_, V_), (V_, P_)]), (1, 1.0, [(V_, V_)]))
+
+
+class ConstantAcceleration(_Linear):
+    """Nearly constant acceleration (seed 000 Sec. III-A): white-noise jerk of density q (m^2/s^5), the Wiener-process
+    acceleration model (Bar-Shalom, Li & Kirubarajan 2001, Sec. 6.2.3)."""
+
+    F_TERMS = ((0, 1.0, [(P_, P_), (V_, V_), (A_, A_)]), (1, 1.0, [(P_, V_), (V_, A_)]), (2, 2.0, [(P_, A_)]))
+    Q_TERMS = ((5, 20.0, [(P_, P_)]), (4, 8.0, [(P_, V_), (V_, P_)]), (3, 6.0, [(P_, A_), (A_, P_)]),
+               (3, 3.0, [(V_, V_)]), (2, 2.0, [(V_, A_), (A_, V_)]), (1, 1.0, [(A_, A_)]))
+
+
+class Brownian(_Linear):
+    """Brownian motion (a Wiener process on the position, seed 000 Sec. III-A): a person standing or milling about;
+    velocity is zero under it. Position noise of density q (m^2/s)."""
+
+    F_TERMS = ((0, 1.0, [(P_, P_)]),)
+    Q_TERMS = ((1, 1.0, [(P_, P_)]),)
+
+
+class CoordinatedTurn(_Model):
+    """Nearly coordinated turn (seed 000 Sec. III-A): the velocity turns at the rate w, the position follows the arc
+    exactly. Nonlinear in w, so the covariance goes through the Jacobian (an extended Kalman filter, as the seed's
+    filters). White-noise acceleration of density q as CV (Eq. 2) plus turn-rate noise of density q_turn."""
+
+    SMALL = 1e-3
+    """|w dt| under which sin(w dt) / w and (1 - cos(w dt)) / w are taken from their series (exact to 1e-14)."""
+
+    def __init__(self, layout: tuple[str, ...], q: float, q_turn: float):
+        self.layout, self.q, self.q_turn = layout, float(q), float(q_turn)
+        self._cv = ConstantVelocity(layout, q)
+
+    def predict_soa(self, x: np.ndarray, P: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """EKF prediction of n tracks by dt: x [d, n], P [d, d, n] -> new arrays."""
+        L = self.layout
+        ix, iy, ivx, ivy, iw = (L.index(c) for c in ("x", "y", "vx", "vy", "w"))
+        vx, vy, w = x[ivx], x[ivy], x[iw]
+        u = w * dt
+        small = np.abs(u) < self.SMALL
+        ws = np.where(small, 1.0, w)
+        s, c = np.sin(u), np.cos(u)
+        A = np.where(small, dt * (1.0 - u * u / 6.0), s / ws)  # sin(w dt) / w
+        B = np.where(small, dt * u / 2.0 * (1.0 - u * u / 12.0), (1.0 - c) / ws)  # (1 - cos(w dt)) / w
+        dA = np.where(small, -w * dt**3 / 3.0, (dt * c - A) / ws)  # d/dw of A
+        dB = np.where(small, dt * dt / 2.0 * (1.0 - u * u / 4.0), (dt * s - B) / ws)  # d/dw of B
+        x_new = np.zeros(x.shape)
+        x_new[ix] = x[ix] + A * vx - B * vy
+        x_new[iy] = x[iy] + B * vx + A * vy
+        x_new[ivx] = c * vx - s * vy
+        x_new[ivy] = s * vx + c * vy
+        x_new[iw] = w
+        J = np.zeros((x.shape[1],) + P.shape[:2])  # one row per track: [n, d, d]
+        J[:, ix, ix] = J[:, iy, iy] = J[:, iw, iw] = 1.0
+        J[:, ix, ivx], J[:, ix, ivy], J[:, ix, iw] = A, -B, dA * vx - dB * vy
+        J[:, iy, ivx], J[:, iy, ivy], J[:, iy, iw] = B, A, dB * vx + dA * vy
+        J[:, ivx, ivx], J[:, ivx, ivy], J[:, ivx, iw] = c, -s, -dt * (s * vx + c * vy)
+        J[:, ivy, ivx], J[:, ivy, ivy], J[:, ivy, iw] = s, c, dt * (c * vx - s * vy)
+        Q = self._cv.matrices(dt)[1]
+        Q[iw, iw] = self.q_turn * dt
+        return x_new, (J @ P.transpose(2, 0, 1) @ J.transpose(0, 2, 1)).transpose(1, 2, 0) + Q[:, :, None]
+
+
+MODELS = {"cv": ConstantVelocity, "ca": ConstantAcceleration, "ct": CoordinatedTurn, "brownian": Brownian}
+
+
+def make_model(kind: str, layout: tuple[str, ...], q: float, q_turn: float):
+    """The model ``kind`` (a name of ``MODELS``) on the state ``layout``; ``q_turn`` is used by CT only."""
+    if kind == "ct":
+        return CoordinatedTurn(layout, q, q_turn)
+    return MODELS[kind](layout, q)
