@@ -11,21 +11,9 @@ from conftest import room
 from pipeline.tracking.mht import KBestAssignments, MHTParams, MultiHypothesisTracker, assignment_matrix
 from pipeline.tracking.nnt import NearestNeighbourTracker
 from pipeline.types import DetectedPersons
+from test_tracker import dets
 
 DT = 0.04  # 25 Hz
-
-
-def dets(stamp, xy, sigma=0.05, first_id=0):
-    """DetectedPersons at the 2D positions xy [m, 2] with covariance diag(sigma^2, sigma^2, 1e6)."""
-    xy = np.asarray(xy, float).reshape(-1, 2)
-    m = xy.shape[0]
-    pos = np.zeros((m, 3))
-    pos[:, :2] = xy
-    cov = np.zeros((m, 3, 3))
-    cov[:, 0, 0] = cov[:, 1, 1] = sigma**2
-    cov[:, 2, 2] = 1e6
-    return DetectedPersons(stamp, "odom", "laser", np.arange(first_id, first_id + m, dtype=np.int64), pos, cov,
-                           np.ones(m))
 
 
 def none(stamp):
@@ -166,7 +154,7 @@ def crossing_ids(tracker, seed, angle_deg=30.0, sigma=0.05, duration=6.0):
     h = np.radians(angle_deg) / 2
     truth = np.stack([np.stack([d * np.cos(h), d * np.sin(h)], 1), np.stack([d * np.cos(h), -d * np.sin(h)], 1)], 1)
     truth = truth + sigma * np.random.default_rng(seed).standard_normal(truth.shape)  # detections
-    outs = [tracker.update(k * DT, dets(k * DT, truth[k], sigma, 2 * k)) for k in range(t.size)]
+    outs = [tracker.update(k * DT, dets(k * DT, truth[k], sigma, first_id=2 * k)) for k in range(t.size)]
 
     def ids(k):
         o = outs[k]

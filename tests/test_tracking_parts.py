@@ -8,23 +8,10 @@ from pipeline.tracking.association import global_assign, greedy_assign, multi_as
 from pipeline.tracking.imm import IMM
 from pipeline.tracking.motion import CoordinatedTurn, make_model, state_layout
 from pipeline.tracking.nnt import NearestNeighbourTracker, TrackerParams, bench_cycles
-from pipeline.types import DetectedPersons
+from test_tracker import dets
 
 DT = 0.04  # 25 Hz
 CV4 = state_layout(["cv"])  # ("x", "y", "vx", "vy")
-
-
-def dets(stamp, xy, sigma=0.05, first_id=0):
-    """DetectedPersons at the 2D positions xy [m, 2], covariance diag(sigma^2, sigma^2, 1e6), in odom."""
-    xy = np.asarray(xy, float).reshape(-1, 2)
-    m = xy.shape[0]
-    pos = np.zeros((m, 3))
-    pos[:, :2] = xy
-    cov = np.zeros((m, 3, 3))
-    cov[:, 0, 0] = cov[:, 1, 1] = sigma**2
-    cov[:, 2, 2] = 1e6
-    return DetectedPersons(stamp, "odom", "laser", np.arange(first_id, first_id + m, dtype=np.int64), pos, cov,
-                           np.ones(m))
 
 
 def feed(tracker, xys, sigma=0.05):

@@ -24,7 +24,29 @@ import functools
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-__all__ = ["ASSOCIATIONS", "mahalanobis", "greedy_assign", "global_assign", "multi_assign"]
+__all__ = ["ASSOCIATIONS", "checked_detections", "mahalanobis", "greedy_assign", "global_assign", "multi_assign"]
+
+
+def checked_detections(stamp: float, det, frame: str, previous: float | None):
+    """A tracker's input checked once for every tracker: detections in the tracker's ``frame``, a finite stamp no
+    earlier than the ``previous`` cycle's, finite x/y and positive-definite x/y covariances. Returns the positions
+    z [m, 2], covariances R [m, 2, 2] and detection ids; ValueError naming what is wrong."""
+    if det.frame != frame:
+        raise ValueError(f"detections are in frame '{det.frame}' but the tracker tracks in frame '{frame}'")
+    if not np.isfinite(stamp):
+        raise ValueError(f"stamp must be finite, got {stamp}")
+    if previous is not None and stamp < previous:
+        raise ValueError(f"stamp {stamp} is earlier than the previous cycle's {previous}")
+    n = len(det)
+    pos, cov = np.asarray(det.position, float), np.asarray(det.covariance, float)
+    if pos.shape != (n, 3) or cov.shape != (n, 3, 3):
+        raise ValueError(f"detections: position {pos.shape} / covariance {cov.shape} do not match {n} ids")
+    z, R = pos[:, :2], cov[:, :2, :2]
+    if not (np.isfinite(z).all() and np.isfinite(R).all()):
+        raise ValueError("detections: x/y position and covariance must be finite")
+    if not ((R[:, 0, 0] > 0.0) & (R[:, 0, 0] * R[:, 1, 1] - R[:, 0, 1] * R[:, 1, 0] > 0.0)).all():
+        raise ValueError("detections: x/y covariance must be positive definite")
+    return z, R, np.asarray(det.detection_id, np.int64)
 
 
 def mahalanobis(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray) -> np.ndarray:

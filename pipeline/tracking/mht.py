@@ -54,7 +54,7 @@ from scipy.optimize import linear_sum_assignment
 
 from pipeline.types import DetectedPersons, TrackedPersons
 
-from .association import mahalanobis
+from .association import checked_detections, mahalanobis
 from .imm import kalman_update
 from .motion import ConstantVelocity, state_layout
 
@@ -326,7 +326,7 @@ class MultiHypothesisTracker:
 
     def update(self, stamp: float, detections: DetectedPersons) -> TrackedPersons:
         """Run one tracking cycle with the detections at ``stamp``; returns the best hypothesis's confirmed tracks."""
-        z, R, det_ids = self._check(stamp, detections)
+        z, R, det_ids = checked_detections(stamp, detections, self.frame, self._stamp)
         stamp = float(stamp)
         dt = 0.0 if self._stamp is None else stamp - self._stamp
         self._stamp = stamp
@@ -337,24 +337,6 @@ class MultiHypothesisTracker:
         children = self._scanback(children)
         self._grow(children, stamp, z, R, det_ids)
         return self._output(stamp)
-
-    def _check(self, stamp: float, det: DetectedPersons) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        if det.frame != self.frame:
-            raise ValueError(f"detections are in frame '{det.frame}' but the tracker tracks in frame '{self.frame}'")
-        if not np.isfinite(stamp):
-            raise ValueError(f"stamp must be finite, got {stamp}")
-        if self._stamp is not None and stamp < self._stamp:
-            raise ValueError(f"stamp {stamp} is earlier than the previous cycle's {self._stamp}")
-        n = len(det)
-        pos, cov = np.asarray(det.position, float), np.asarray(det.covariance, float)
-        if pos.shape != (n, 3) or cov.shape != (n, 3, 3):
-            raise ValueError(f"detections: position {pos.shape} / covariance {cov.shape} do not match {n} ids")
-        z, R = pos[:, :2], cov[:, :2, :2]
-        if not (np.isfinite(z).all() and np.isfinite(R).all()):
-            raise ValueError("detections: x/y position and covariance must be finite")
-        if not ((R[:, 0, 0] > 0.0) & (R[:, 0, 0] * R[:, 1, 1] - R[:, 0, 1] * R[:, 1, 0] > 0.0)).all():
-            raise ValueError("detections: x/y covariance must be positive definite")
-        return z, R, np.asarray(det.detection_id, np.int64)
 
     def _costs(self, z: np.ndarray, R: np.ndarray) -> None:
         """Every decision's cost for every node and detection this cycle, and the closed-form options."""

@@ -54,7 +54,7 @@ import numpy as np
 
 from pipeline.types import DetectedPersons, TrackedPersons
 
-from .association import ASSOCIATIONS, mahalanobis
+from .association import ASSOCIATIONS, checked_detections, mahalanobis
 from .deletion import DELETIONS, DeletionLogic
 from .imm import IMM
 from .initiation import INITIATIONS, InitiationLogic
@@ -250,7 +250,7 @@ class NearestNeighbourTracker:
 
     def update(self, stamp: float, detections: DetectedPersons) -> TrackedPersons:
         """Run one tracking cycle with the detections at ``stamp``; returns the confirmed tracks."""
-        z, R, det_ids = self._check(stamp, detections)
+        z, R, det_ids = checked_detections(stamp, detections, self.frame, self._stamp)
         stamp = float(stamp)
         dt = 0.0 if self._stamp is None else stamp - self._stamp
         self._stamp = stamp
@@ -264,27 +264,6 @@ class NearestNeighbourTracker:
         self._initiate(stamp, cols, z, R, det_ids)
         self._confirm()
         return self._output(stamp)
-
-    def _check(self, stamp: float, det: DetectedPersons) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        if det.frame != self.frame:
-            raise ValueError(f"detections are in frame '{det.frame}' but the tracker tracks in frame '{self.frame}'")
-        if not np.isfinite(stamp):
-            raise ValueError(f"stamp must be finite, got {stamp}")
-        if self._stamp is not None and stamp < self._stamp:
-            raise ValueError(f"stamp {stamp} is earlier than the previous cycle's {self._stamp}")
-        n = len(det)
-        pos = np.asarray(det.position, float)
-        cov = np.asarray(det.covariance, float)
-        if pos.shape != (n, 3) or cov.shape != (n, 3, 3):
-            raise ValueError(f"detections: position {pos.shape} / covariance {cov.shape} do not match {n} ids")
-        z = pos[:, :2]
-        R = cov[:, :2, :2]
-        if n:
-            if not np.isfinite(z).all() or not np.isfinite(R).all():
-                raise ValueError("detections: x/y position and covariance must be finite")
-            if not ((R[:, 0, 0] > 0.0) & (R[:, 0, 0] * R[:, 1, 1] - R[:, 0, 1] * R[:, 1, 0] > 0.0)).all():
-                raise ValueError("detections: x/y covariance must be positive definite")
-        return z, R, np.asarray(det.detection_id, np.int64)
 
     def _associate(self, stamp: float, z: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Gate; confirmed tracks choose by the configured association, candidates after them by greedy NN on what
