@@ -220,12 +220,16 @@ def _cmd_experiment(args) -> int:
     if args.what == "train-detector":
         return _cmd_train_detector(args)
     if args.what == "table2":
-        from .experiments.table2 import report, table2
+        from .experiments.table2 import table2, write
 
         if args.seeds < 1:
             raise UsageError(f"--seeds: expected at least 1, got {args.seeds}")
         seeds = list(range(1, args.seeds + 1))
-        print(report(table2(seeds, args.duration, workers=args.workers), seeds))
+        out = Path(args.out) if args.out else Path("runs") / f"table2-{time.strftime('%Y%m%d-%H%M%S')}"
+        check_out_dir(out)
+        figures = table2(seeds, args.duration, workers=args.workers)
+        print(write_directory(out, lambda tmp: write(tmp, figures, seeds)))
+        print(f"\n{out / 'table2.md'}, table2.json, table2.png")
         return 0
     if args.what == "tune":
         try:
@@ -438,7 +442,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--people", type=int, default=10, help="people per environment (default 10)")
     p.add_argument("--seed", type=int, default=0, help="training seed (evaluation seeds are disjoint)")
     p.add_argument("--eval-episodes", type=int, default=100, help="evaluation episodes per policy (default 100)")
-    p.add_argument("--out", help="output directory (default runs/ppo-<time>; train-detector: the shipped models, "
+    p.add_argument("--out", help="output directory (default runs/<what>-<time>; train-detector: the shipped models, "
                                  "pipeline/detectors/models/, replaced); must be new or empty")
     p.add_argument("--seeds", type=int, default=20, help="train-detector: training seeds, from 1000 (default 20); "
                                                         "table2: seeds from 1")

@@ -4,22 +4,45 @@ tracker score exactly what the run scored, and the claims read off a hand-made t
 import numpy as np
 import pytest
 
-from crowdsim.experiments.table2 import ROWS, SCENARIO, claims, record, replay
+from crowdsim.experiments.table2 import ROWS, SCENARIO, WALKING, claims, record, replay
 from crowdsim.loop import Simulation
 from scenarios import load_scenario
 
 
 def test_replaying_the_recorded_detections_scores_what_the_run_scored():
-    frames = record(seed=3, duration=4.0)
+    frames = record(seed=3, duration=4.0, detector=None)  # the airport's own pipeline
     sim = Simulation(load_scenario(SCENARIO))
     sim.reset(3)
     sim.warm_up()
     n = sum(1 for _ in sim.frames(4.0))
     assert len(frames) == n == 100  # 4 s of 25 Hz cycles
     run = sim.clearmot.summary()
-    replayed = replay(frames, dict(load_scenario(SCENARIO)["pipeline"]["tracker"]))
+    replayed = replay(frames, dict(load_scenario(SCENARIO)["pipeline"]["tracker"]))["all"]
     assert replayed["mota"] == pytest.approx(100 * run["mota"], abs=1e-12)
     assert replayed["ids"] == run["id_switches"] and replayed["hz"] > 0
+
+
+def test_the_walking_evaluation_leaves_out_exactly_the_standing_persons():
+    """Scored over walking persons only, a tracker that outputs every ground-truth person has no miss and no false
+    positive (standing persons' tracks match them, ignored); scored over everyone, the same holds; a tracker that
+    outputs only the walkers misses exactly the standing persons in the first and nothing in the second."""
+    from evaluation.clearmot import ClearMot
+
+    frames = record(seed=3, duration=2.0)
+    standing = counted = 0
+    for name, keep in (("every", lambda s: np.ones(s.size, bool)), ("walkers", lambda s: s >= WALKING)):
+        every, walking = ClearMot(1.0), ClearMot(1.0)
+        for _, _, ids, pos, ignore, speed in frames:
+            k = keep(speed)
+            every.update(ids, pos, ids[k], pos[k], ignore)
+            walking.update(ids, pos, ids[k], pos[k], ignore | (speed < WALKING))
+            if name == "every":
+                standing += int(np.count_nonzero(~ignore & (speed < WALKING)))
+                counted += int(np.count_nonzero(~ignore))
+        e, w = every.summary(), walking.summary()
+        assert w["fn"] == 0 and w["fp"] == 0
+        assert e["fp"] == 0 and e["fn"] == (0 if name == "every" else standing)
+    assert 0 < standing < counted  # the airport has both
 
 
 def table(**rows) -> np.ndarray:
@@ -45,3 +68,23 @@ def test_claims_hold_or_fail_on_their_numbers():
     failing = holding.copy()
     failing[8, 4] = 91
     assert [ok for _, ok, _ in claims(failing)][-1] is False
+
+
+def test_write_keeps_every_seed_figure_and_the_published_column(tmp_path):
+    import json
+
+    from crowdsim.experiments.table2 import COLUMNS, EVALUATIONS, write
+
+    rng = np.random.default_rng(0)
+    figures = {name: rng.uniform(1, 100, (len(ROWS), 2, len(COLUMNS))) for name in EVALUATIONS}
+    text = write(tmp_path, figures, [1, 2])
+    saved = json.loads((tmp_path / "table2.json").read_text())
+    assert [r["label"] for r in saved["rows"]] == [label.strip() for label, _, _ in ROWS]
+    for k, row in enumerate(saved["rows"]):
+        assert row["published_pedsim"] == list(ROWS[k][2])
+        for name in EVALUATIONS:
+            assert np.array_equal(np.array(row[name]), figures[name][k])
+    assert (tmp_path / "table2.md").read_text() == text + "\n"
+    assert text.count("Claims:") == 2 and (tmp_path / "table2.png").stat().st_size > 10_000
+    greedy = figures["all"][2]
+    assert f"| Greedy NN | {greedy[:, 0].mean():.1f} +- {greedy[:, 0].std(ddof=1):.1f} / 80.5 |" in text
