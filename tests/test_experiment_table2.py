@@ -1,48 +1,61 @@
 """``crowdsim experiment table2``'s parts on small cases: the recorded detections replayed into the airport's own
 tracker score exactly what the run scored, and the claims read off a hand-made table."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
-from crowdsim.experiments.table2 import ROWS, SCENARIO, WALKING, claims, record, replay
+from crowdsim.experiments.recorded import detect, record, track
+from crowdsim.experiments.table2 import ROWS, SCENARIO, WALKING, claims, replay, seed000_pipeline
 from crowdsim.loop import Simulation
 from scenarios import load_scenario
 
 
-def test_replaying_the_recorded_detections_scores_what_the_run_scored():
-    frames = record(seed=3, duration=4.0, detector=None)  # the airport's own pipeline
-    sim = Simulation(load_scenario(SCENARIO))
+def test_the_recorded_scans_replayed_through_the_airports_pipeline_score_what_the_run_scored():
+    scenario = load_scenario(SCENARIO)
+    cycles = record(scenario, seed=3, duration=4.0)
+    sim = Simulation(scenario)
     sim.reset(3)
     sim.warm_up()
     n = sum(1 for _ in sim.frames(4.0))
-    assert len(frames) == n == 100  # 4 s of 25 Hz cycles
+    assert len(cycles) == n == 100  # 4 s of 25 Hz cycles
     run = sim.clearmot.summary()
-    replayed = replay(frames, dict(load_scenario(SCENARIO)["pipeline"]["tracker"]))["all"]
+    detections = detect(cycles, scenario["pipeline"], scenario["map"])
+    replayed = replay(cycles, detections, dict(scenario["pipeline"]["tracker"]))["all"]
     assert replayed["mota"] == pytest.approx(100 * run["mota"], abs=1e-12)
     assert replayed["ids"] == run["id_switches"] and replayed["hz"] > 0
+    # seed 000's detector in the airport's place: its own detections, fused and map-filtered as the run's
+    seed000 = detect(cycles, seed000_pipeline(scenario), scenario["map"])
+    assert sum(map(len, seed000)) != sum(map(len, detections))
 
 
 def test_the_walking_evaluation_leaves_out_exactly_the_standing_persons():
     """Scored over walking persons only, a tracker that outputs every ground-truth person has no miss and no false
     positive (standing persons' tracks match them, ignored); scored over everyone, the same holds; a tracker that
     outputs only the walkers misses exactly the standing persons in the first and nothing in the second."""
-    from evaluation.clearmot import ClearMot
-
-    frames = record(seed=3, duration=2.0)
-    standing = counted = 0
-    for name, keep in (("every", lambda s: np.ones(s.size, bool)), ("walkers", lambda s: s >= WALKING)):
-        every, walking = ClearMot(1.0), ClearMot(1.0)
-        for _, _, ids, pos, ignore, speed in frames:
-            k = keep(speed)
-            every.update(ids, pos, ids[k], pos[k], ignore)
-            walking.update(ids, pos, ids[k], pos[k], ignore | (speed < WALKING))
-            if name == "every":
-                standing += int(np.count_nonzero(~ignore & (speed < WALKING)))
-                counted += int(np.count_nonzero(~ignore))
-        e, w = every.summary(), walking.summary()
-        assert w["fn"] == 0 and w["fp"] == 0
-        assert e["fp"] == 0 and e["fn"] == (0 if name == "every" else standing)
+    cycles = record(load_scenario(SCENARIO), seed=3, duration=2.0)
+    standing = int(sum(np.count_nonzero(~c.gt_ignore & (c.gt_speed < WALKING)) for c in cycles))
+    counted = int(sum(np.count_nonzero(~c.gt_ignore) for c in cycles))
     assert 0 < standing < counted  # the airport has both
+
+    class Oracle:
+        """Outputs the ground truth of the cycle it is given, or its walkers alone."""
+
+        def __init__(self, walkers_only: bool):
+            self.walkers_only, self.k = walkers_only, 0
+
+        def update(self, stamp, detections):
+            c = cycles[self.k]
+            self.k += 1
+            keep = c.gt_speed >= WALKING if self.walkers_only else np.ones(c.gt_ids.size, bool)
+            return SimpleNamespace(track_id=c.gt_ids[keep], position=c.gt_position[keep])
+
+    evaluations = {"all": 0.0, "walking": WALKING}
+    for walkers_only in (False, True):
+        s, _ = track(cycles, [None] * len(cycles), Oracle(walkers_only), 1.0, evaluations)
+        assert s["walking"]["fn"] == s["walking"]["fp"] == 0 == s["all"]["fp"]
+        assert s["all"]["fn"] == (standing if walkers_only else 0)
 
 
 def table(**rows) -> np.ndarray:

@@ -18,19 +18,19 @@ which of the claims turn on that difference.
 
 from __future__ import annotations
 
-import time
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
 
 import numpy as np
 from tqdm import tqdm
 
-from evaluation.clearmot import ClearMot
 from pipeline.assemble import TRACKERS, build_part
 from scenarios import load_scenario
 from scenarios.format import DETECTOR as DETECTOR_SPEC
 from scenarios.format import TRACKER
 from scenarios.schema import validate
+
+from .recorded import Cycle, detect, record, track
 
 SCENARIO = "airport_disembarkation"
 DETECTOR = {"type": "laser_learned", "model": "adaboost"}  # seed 000 Sec. IV-C: the boosted segment classifier
@@ -56,48 +56,25 @@ ROWS = [
 COLUMNS = ("mota", "ids", "fp", "miss", "hz")
 
 
-def record(seed: int, duration: float | None = None, detector: dict | None = DETECTOR) -> list[tuple]:
-    """One airport run's tracking input and ground truth per cycle: (stamp, fused detections, gt ids, gt positions,
-    gt ignored, gt speeds). ``detector``: the pipeline's detector (None: the airport's own)."""
-    from crowdsim.loop import Simulation
-
-    scenario = load_scenario(SCENARIO)
-    if detector is not None:
-        scenario["pipeline"]["detector"] = validate(detector, DETECTOR_SPEC, "<table2>", "pipeline.detector")
-    sim = Simulation(scenario)
-    sim.reset(seed)
-    sim.warm_up()
-    frames = []
-    for f in sim.frames(scenario["duration"] if duration is None else duration):
-        gt = f.groundtruth
-        frames.append((f.stamp, f.detections, gt.track_id, gt.position, f.gt_tags.ignore,
-                       np.linalg.norm(gt.velocity, axis=1)))
-    return frames
+def seed000_pipeline(scenario: dict) -> dict:
+    """The airport's pipeline section with seed 000's detector in place of its own."""
+    return {**scenario["pipeline"], "detector": validate(DETECTOR, DETECTOR_SPEC, "<table2>", "pipeline.detector")}
 
 
-def replay(frames: list[tuple], spec: dict) -> dict:
-    """A tracker of ``spec`` over the recorded frames: per evaluation (``EVALUATIONS``), MOTA, ID switches, FP % and
+def replay(cycles: list[Cycle], detections: list, spec: dict) -> dict:
+    """A tracker of ``spec`` over recorded detections: per evaluation (``EVALUATIONS``), MOTA, ID switches, FP % and
     miss % (of the counted ground truth), and the tracker's cycles/s."""
     tracker = build_part(validate(spec, TRACKER, "<table2>", "pipeline.tracker"), TRACKERS)
-    scores = {name: ClearMot(1.0) for name in EVALUATIONS}
-    spent = 0.0
-    for stamp, detections, gt_ids, gt_pos, ignore, speed in frames:
-        t = time.perf_counter()
-        tracks = tracker.update(stamp, detections)
-        spent += time.perf_counter() - t
-        scores["all"].update(gt_ids, gt_pos, tracks.track_id, tracks.position, ignore)
-        scores["walking"].update(gt_ids, gt_pos, tracks.track_id, tracks.position, ignore | (speed < WALKING))
-    out = {}
-    for name, score in scores.items():
-        s = score.summary()
-        out[name] = {"mota": 100 * s["mota"], "ids": s["id_switches"], "fp": 100 * s["fp_rate"],
-                     "miss": 100 * s["miss_rate"], "hz": len(frames) / spent}
-    return out
+    summaries, hz = track(cycles, detections, tracker, 1.0, {"all": 0.0, "walking": WALKING})
+    return {name: {"mota": 100 * s["mota"], "ids": s["id_switches"], "fp": 100 * s["fp_rate"],
+                   "miss": 100 * s["miss_rate"], "hz": hz} for name, s in summaries.items()}
 
 
 def _one_seed(seed: int, duration: float | None) -> list[dict]:
-    frames = record(seed, duration)
-    return [replay(frames, spec) for _, spec, _ in ROWS]
+    scenario = load_scenario(SCENARIO)
+    cycles = record(scenario, seed, duration)
+    detections = detect(cycles, seed000_pipeline(scenario), scenario["map"])
+    return [replay(cycles, detections, spec) for _, spec, _ in ROWS]
 
 
 def table2(seeds: list[int], duration: float | None = None, workers: int = 1,
