@@ -391,6 +391,12 @@ NNT = Schema({
     "n_delete_young": F("int", 20, min=1, doc="misses that delete a young track (seed 000 Sec. V-C: 20)"),
     "n_delete_mature": F("int", 50, min=1, doc="misses that delete a mature track (seed 000 Sec. V-C: 50)"),
     "mature_after": F("int", 100, min=1, doc="detections that make a track mature (seed 000 Sec. V-C: 100)"),
+    "duplicate_distance": F("float", 0.0, min=0.0,
+                            doc="m, two tracks this close in 7 of their last 10 cycles: the one matched fewer times "
+                                "goes (the SPENCER NNT's duplicate deletion: 0.15); 0: off"),
+    "new_track_clearance": F("float", 0.0, min=0.0,
+                             doc="m, no new candidate this close to a track matched in the last 5 cycles (the SPENCER "
+                                 "NNT's close-by check: 0.25); 0: off"),
     "motion": F("str", "cv", choices=("cv", "ca", "ct", "brownian", "imm"),
                 doc="motion model: constant velocity (seed 000 Eq. 1-2), constant acceleration, coordinated turn "
                     "(EKF), Brownian, or an IMM of imm_models (Sec. III-A)"),

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from evaluation import ClearMot
-from pipeline.tracking.association import greedy_assign, mahalanobis
+from pipeline.tracking.association import WINDOWS_FROM, gated_mahalanobis, greedy_assign, mahalanobis
 from pipeline.tracking.imm import kalman_update
 from pipeline.tracking.motion import ConstantVelocity, state_layout
 from pipeline.tracking.nnt import NearestNeighbourTracker, TrackerParams
@@ -91,6 +91,29 @@ def test_mahalanobis_hand_worked():
     # correlated S = [[2, 1], [1, 2]] (P xy = 1): S^-1 = [[2, -1], [-1, 2]] / 3; nu = (1, 1) -> (2 - 2 + 2) / 3 = 2/3
     P = np.array([[[1.0, 1.0, 0, 0], [1.0, 1.0, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]])
     np.testing.assert_allclose(mahalanobis(x, P, np.array([[1.0, 1.0]]), np.eye(2)[None]), [[2.0 / 3.0]])
+
+
+def test_gated_mahalanobis_is_the_full_matrix_within_the_gate():
+    # 80 tracks x 70 detections (over WINDOWS_FROM: the windowed path), correlated and unequal covariances, some
+    # tracks far more uncertain than others, detections sharing an x: every pair within the gate has the full
+    # matrix's value, bit for bit, and no pair within it is missed
+    rng = np.random.default_rng(3)
+    n, m, gate = 80, 70, 13.82
+    x = rng.uniform(0, 30, (n, 4))
+    A = rng.normal(0, 0.3, (n, 4, 4)) * rng.choice([0.2, 1.0, 3.0], (n, 1, 1))
+    P = A @ A.transpose(0, 2, 1) + 0.01 * np.eye(4)
+    z = np.concatenate([x[:50, :2] + rng.normal(0, 0.3, (50, 2)), rng.uniform(0, 30, (20, 2))])
+    z[60:65, 0] = z[10, 0]
+    B = rng.normal(0, 0.2, (m, 2, 2))
+    R = B @ B.transpose(0, 2, 1) + 0.005 * np.eye(2)
+    assert n * m >= WINDOWS_FROM
+    full, gated = mahalanobis(x, P, z, R), gated_mahalanobis(x, P, z, R, gate)
+    inside = full <= gate
+    assert inside.sum() > 100 and np.isfinite(gated).sum() < n * m / 2  # a test of windows that skip pairs
+    np.testing.assert_array_equal(gated <= gate, inside)
+    np.testing.assert_array_equal(gated[inside], full[inside])
+    # small problems take the whole matrix
+    np.testing.assert_array_equal(gated_mahalanobis(x[:5], P[:5], z[:5], R[:5], gate), full[:5, :5])
 
 
 def test_greedy_assign_takes_global_minimum_first():

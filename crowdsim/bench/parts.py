@@ -1,5 +1,5 @@
-"""``crowdsim bench``: the speed of each hot part (crowd, laser, tracker) and of the whole loop, measured side by side
-in one run."""
+"""``crowdsim bench``: the speed of each hot part (crowd, laser, each of Table II's trackers at 30 and 80 tracks, with
+and without clutter) and of the whole loop, measured side by side in one run."""
 
 from __future__ import annotations
 
@@ -29,35 +29,42 @@ def bench_laser(n_people: int, quick: bool) -> float:
     return rate(lambda: laser.scan(0.0, pose), 50 if quick else 400)
 
 
-def bench_tracker(n_tracks: int, quick: bool) -> float:
-    from pipeline.tracking.nnt import NearestNeighbourTracker
-    from pipeline.types import DetectedPersons
+CLUTTER = (0.05, 2)
+"""The tracker rows' clutter: each person missed with probability 0.05, and 2 false alarms per cycle."""
 
-    rng = np.random.default_rng(0)
-    start = rng.uniform(0, 30, (n_tracks, 2))
-    heading = rng.uniform(-np.pi, np.pi, n_tracks)
-    vel = 1.3 * np.stack([np.cos(heading), np.sin(heading)], 1)
-    cov = np.zeros((n_tracks, 3, 3))
-    cov[:, 0, 0] = cov[:, 1, 1] = 0.1
-    cov[:, 2, 2] = 1e6
-    frames = []
-    for k in range(400):
-        pos = np.concatenate([start + vel * k * 0.04 + rng.normal(0, 0.05, (n_tracks, 2)), np.zeros((n_tracks, 1))],
-                             1)
-        frames.append(DetectedPersons(k * 0.04, "odom", "laser2d", np.arange(n_tracks) + k * n_tracks, pos, cov,
-                                      np.ones(n_tracks)))
-    tracker = NearestNeighbourTracker(frame="odom")
-    for f in frames[:10]:  # confirm the tracks first, so the timed cycles run with n_tracks tracks
-        tracker.update(f.stamp, f)
-    state = {"k": 10}
 
-    def cycle():
-        f = frames[state["k"] % len(frames)]
-        f.stamp = state["k"] * 0.04
-        tracker.update(f.stamp, f)
-        state["k"] += 1
+def tracker_variants() -> list[tuple[str, str, dict]]:
+    """Table II's trackers (``crowdsim.experiments.table2.ROWS``) as (figure key, label, tracker spec), key and label
+    naming the parts each row adds to the base NNT."""
+    from crowdsim.experiments.table2 import ROWS
 
-    return rate(cycle, 50 if quick else 190 // 5)
+    out = []
+    for _, spec, _ in ROWS:
+        if spec["type"] == "mht":
+            out.append(("mht", "MHT", spec))
+            continue
+        parts = [spec.get("association", "greedy")]
+        parts += [f"{spec['initiation']} init"] if "initiation" in spec else []
+        parts += ["deletion"] if spec.get("deletion") == "young_mature" else []
+        parts += ["IMM"] if spec.get("motion") == "imm" else []
+        out.append(("_".join(parts).lower().replace(" ", "_"), "NNT " + " + ".join(parts), spec))
+    # every NNT row has SPENCER's duplicate guards (pipeline/tracking/duplicates.py); the full NNT also without them
+    key, label, spec = out[-2]
+    out.insert(-1, (key + "_no_guards", label + ", no duplicate guards",
+                    {k: v for k, v in spec.items() if k not in ("duplicate_distance", "new_track_clearance")}))
+    return out
+
+
+def bench_tracker(spec: dict, n_tracks: int, clutter: bool, quick: bool) -> float:
+    """Cycles/s of the tracker ``spec`` on ``n_tracks`` walkers (``pipeline.tracking.nnt.bench_cycles``); the MHT,
+    some 50 times slower, gets fewer cycles."""
+    from pipeline.tracking.nnt import bench_cycles
+
+    if spec["type"] == "mht":
+        cycles, blocks, warm = (5, 1, 10) if quick else (20, 3, 50)
+    else:
+        cycles, blocks, warm = (20, 3, 20) if quick else (200, 5, 50)
+    return bench_cycles(n_tracks, spec, *(CLUTTER if clutter else (0.0, 0)), cycles, blocks, warm).cycles_per_s
 
 
 def bench_loop(quick: bool) -> dict:
@@ -80,15 +87,19 @@ def run_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
 
     def show(key, value, unit, what):
         figures[key] = value
-        print(f"{what:58s} {value:12,.1f} {unit}", flush=True)
+        print(f"{what:66s} {value:12,.1f} {unit}", flush=True)
 
     print(f"crowdsim bench on {platform.processor() or platform.machine()}, Python {platform.python_version()}"
           f"{' (quick)' if quick else ''}")
     show("crowd_steps_per_s_100", bench_crowd(100, quick), "steps/s", "crowd step, 100 agents (dt 0.04 s)")
     show("crowd_steps_per_s_1000", bench_crowd(1000, quick), "steps/s", "crowd step, 1000 agents (dt 0.04 s)")
     show("laser_scans_per_s_100", bench_laser(100, quick), "scans/s", "laser scan, 381 beams, 100 people")
-    show("tracker_cycles_per_s_30", bench_tracker(30, quick), "cycles/s", "tracker cycle, 30 tracks")
-    show("tracker_cycles_per_s_80", bench_tracker(80, quick), "cycles/s", "tracker cycle, 80 tracks")
+    for key, label, spec in tracker_variants():
+        for n in (30, 80):
+            for clutter in (False, True):
+                show(f"tracker_{key}_cycles_per_s_{n}{'_clutter' if clutter else ''}",
+                     bench_tracker(spec, n, clutter, quick), "cycles/s",
+                     f"{label}, {n} tracks{', clutter' if clutter else ''}")
     loop = bench_loop(quick)
     show("loop_realtime_factor", loop["realtime_factor"], "x real time",
          f"airport loop, 2 lasers @25 Hz + tracker + CLEAR-MOT ({loop['mean_persons_in_range']:.0f} in range)")

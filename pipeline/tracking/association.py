@@ -20,11 +20,13 @@ columns left (the tracker's initiation candidates, which seed 000 Alg. 1 gives t
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-__all__ = ["ASSOCIATIONS", "checked_detections", "mahalanobis", "greedy_assign", "global_assign", "multi_assign"]
+__all__ = ["ASSOCIATIONS", "WINDOWS_FROM", "checked_detections", "mahalanobis", "gated_mahalanobis", "greedy_assign",
+           "global_assign", "multi_assign"]
 
 
 def checked_detections(stamp: float, det, frame: str, previous: float | None):
@@ -33,7 +35,7 @@ def checked_detections(stamp: float, det, frame: str, previous: float | None):
     z [m, 2], covariances R [m, 2, 2] and detection ids; ValueError naming what is wrong."""
     if det.frame != frame:
         raise ValueError(f"detections are in frame '{det.frame}' but the tracker tracks in frame '{frame}'")
-    if not np.isfinite(stamp):
+    if not math.isfinite(stamp):
         raise ValueError(f"stamp must be finite, got {stamp}")
     if previous is not None and stamp < previous:
         raise ValueError(f"stamp {stamp} is earlier than the previous cycle's {previous}")
@@ -55,11 +57,55 @@ def mahalanobis(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray) -> n
     x [n, >=2], P [n, >=2, >=2] (predicted tracks; position first), z [m, 2] positions, R [m, 2, 2] their
     covariances; returns [n, m]. nu = z_j - H x_i, S = H P_i H^T + R_j; the 2x2 inverse is written out in closed form.
     """
-    nu0 = np.subtract.outer(x[:, 0], z[:, 0])  # sign of nu does not matter for d^2
-    nu1 = np.subtract.outer(x[:, 1], z[:, 1])
-    s00 = np.add.outer(P[:, 0, 0], R[:, 0, 0])
-    s11 = np.add.outer(P[:, 1, 1], R[:, 1, 1])
-    s01 = np.add.outer(P[:, 0, 1], 0.5 * (R[:, 0, 1] + R[:, 1, 0]))
+    return _d2(np.subtract.outer(x[:, 0], z[:, 0]), np.subtract.outer(x[:, 1], z[:, 1]),  # the sign of nu is moot
+               np.add.outer(P[:, 0, 0], R[:, 0, 0]), np.add.outer(P[:, 1, 1], R[:, 1, 1]),
+               np.add.outer(P[:, 0, 1], 0.5 * (R[:, 0, 1] + R[:, 1, 0])))
+
+
+WINDOWS_FROM = 3000
+"""Track-detection pairs from which ``gated_mahalanobis`` computes windows: below it, the whole matrix takes fewer
+(and no slower) numpy calls (measured: 27 against 45 us at 30 x 30, 87 against 60 us at 80 x 80)."""
+
+
+def gated_mahalanobis(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray, gate: float) -> np.ndarray:
+    """``mahalanobis(x, P, z, R)`` where a pair can lie within ``gate``, inf (or its own value) where it cannot: the
+    same numbers wherever it matters to an association, bit for bit.
+
+    Why: in a crowd a track's gate holds a few of the detections, and the full [n, m] matrix was the costliest step
+    of a tracking cycle. For any positive-definite S, nu^T S^-1 nu >= nu_x^2 / S_xx, so a pair within the gate has
+    |x_i - z_j| <= sqrt(gate (P_i,xx + R_xx)) along x, R_xx the largest of the detections': they are sorted by x once
+    and each track computes only the window of them that its bound allows. The window is widened (its square by half
+    again) so that rounding in the computed d^2 (relative errors of 1e-16 times S's condition number) cannot bring a
+    pair outside it within the gate.
+    """
+    n, m = x.shape[0], z.shape[0]
+    if n * m < WINDOWS_FROM:
+        return mahalanobis(x, P, z, R)
+    order = np.argsort(z[:, 0], kind="stable")
+    zx = z[:, 0].take(order)
+    half = np.sqrt((P[:, 0, 0] + R[:, 0, 0].max()) * (1.5 * gate))
+    lo = np.searchsorted(zx, x[:, 0] - half, "left")
+    count = np.searchsorted(zx, x[:, 0] + half, "right") - lo
+    rows = np.arange(n).repeat(count)
+    first = count.cumsum() - count  # each row's first pair
+    cols = order.take((lo - first).repeat(count) + np.arange(rows.size))  # sorted detections lo_i, lo_i + 1, ...
+
+    def tracks(v):  # 1-D takes: far cheaper than fancy indexing of the strided [n, 2, 2]
+        return v.take(rows)
+
+    def dets(v):
+        return v.take(cols)
+
+    d2 = np.full((n, m), np.inf)
+    d2[rows, cols] = _d2(tracks(x[:, 0]) - dets(z[:, 0]), tracks(x[:, 1]) - dets(z[:, 1]),
+                         tracks(P[:, 0, 0]) + dets(R[:, 0, 0]), tracks(P[:, 1, 1]) + dets(R[:, 1, 1]),
+                         tracks(P[:, 0, 1]) + 0.5 * (dets(R[:, 0, 1]) + dets(R[:, 1, 0])))
+    return d2
+
+
+def _d2(nu0: np.ndarray, nu1: np.ndarray, s00: np.ndarray, s11: np.ndarray, s01: np.ndarray) -> np.ndarray:
+    """nu^T S^-1 nu from the innovation's components and S's, elementwise (one operation order for every caller,
+    so that the dense and the gated distances agree bit for bit)."""
     d2 = s11 * nu0 * nu0
     d2 -= 2.0 * s01 * nu0 * nu1
     d2 += s00 * nu1 * nu1

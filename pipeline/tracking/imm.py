@@ -58,7 +58,8 @@ class IMM:
     the Markov matrix p_ij = P(model j at this cycle | model i at the last), rows summing to 1 (None when M = 1).
 
     The tracks' filter state is a dict of arrays, tracks last, the names ``keys``: x [d, M, n], P [d, d, M, n] and,
-    with M > 1, the mode probabilities mu [M, n]. Every method returns new arrays.
+    with M > 1, the mode probabilities mu [M, n]. Every method returns new arrays (``start`` fills given ones if
+    asked).
     """
 
     def __init__(self, models: list, transition: np.ndarray | None = None):
@@ -67,19 +68,23 @@ class IMM:
         self.M, self.d = len(models), len(self.layout)
         self.transition = None if transition is None else np.asarray(transition, float)
         self.keys = ("x", "P", "mu") if self.M > 1 else ("x", "P")
+        self.shapes = dict(zip(self.keys, ((self.d, self.M), (self.d, self.d, self.M), (self.M,))))  # per track
 
-    def start(self, z: np.ndarray, R: np.ndarray, velocity_variance: float) -> dict:
+    def start(self, z: np.ndarray, R: np.ndarray, velocity_variance: float, out: dict | None = None) -> dict:
         """k new tracks at the positions z [k, 2] (covariances R [k, 2, 2]), everything else 0 with its initial
-        variance; every model starts from the same estimate, the mode probabilities uniform."""
-        k, M, d = z.shape[0], self.M, self.d
-        x = np.zeros((d, M, k))
+        variance; every model starts from the same estimate, the mode probabilities uniform. Written into ``out``
+        when given (the new tracks' arrays, all zero: the tracker's own columns, so that a birth copies nothing),
+        else into new arrays."""
+        s = out if out is not None else {key: np.zeros((*shape, z.shape[0])) for key, shape in self.shapes.items()}
+        x, P = s["x"], s["P"]
         x[:2] = z.T[:, None]
-        P = np.zeros((d, d, M, k))
         P[:2, :2] = R.transpose(1, 2, 0)[:, :, None]
         P[2, 2] = P[3, 3] = velocity_variance
         for i, c in enumerate(self.layout[4:], start=4):
             P[i, i] = INITIAL_VARIANCE[c]
-        return {"x": x, "P": P, "mu": np.full((M, k), 1.0 / M)} if M > 1 else {"x": x, "P": P}
+        if self.M > 1:
+            s["mu"][...] = 1.0 / self.M
+        return s
 
     def predict(self, s: dict, dt: float) -> dict:
         """One cycle ahead by dt > 0: the IMM's interaction (mixing) step, then each model's own prediction from

@@ -61,7 +61,10 @@ class _Model:
 class _Linear(_Model):
     """x <- F x, P <- F P F^T + Q with F = sum dt^p / c F_k and Q = q sum dt^p / c Q_k over the model's ``F_TERMS``
     and ``Q_TERMS`` (p, c, blocks), each F_k, Q_k a 0/1 pattern of blocks (disjoint within F and within Q). F, Q
-    and F (x) F are kept for the last dt (the cycles of one sensor mostly repeat it)."""
+    and F (x) F are kept for up to ``CACHED`` values of dt: a sensor's cycles repeat a few (stamps k * 0.04 s differ
+    by a dozen distinct dt in floating point, and keeping only the last dt recomputed them every other cycle)."""
+
+    CACHED = 16
 
     F_TERMS: tuple
     Q_TERMS: tuple
@@ -72,7 +75,7 @@ class _Linear(_Model):
         self._terms = [(np.array([p for p, _, _ in terms]), np.array([c for _, c, _ in terms]),
                         np.stack([_pattern(layout, blocks).ravel() for _, _, blocks in terms], 1))
                        for terms in (self.F_TERMS, self.Q_TERMS)]
-        self._dt: float | None = None
+        self._cache: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}  # dt -> F, F (x) F, Q as a column
 
     def matrices(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """(F, Q) for a step of dt."""
@@ -83,12 +86,16 @@ class _Linear(_Model):
     def predict_soa(self, x: np.ndarray, P: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """Prediction of n tracks by dt: x [d, n], P [d, d, n] -> new arrays. F P F^T is one product for all tracks,
         (F (x) F) vec(P)."""
-        if dt != self._dt:
+        cached = self._cache.get(dt)
+        if cached is None:
+            if len(self._cache) >= self.CACHED:
+                self._cache.clear()
             F, Q = self.matrices(dt)
             FF = (F[:, None, :, None] * F[None, :, None, :]).reshape(F.size, F.size)  # np.kron(F, F), sooner
-            self._F, self._FF, self._Q, self._dt = F, FF, Q.reshape(-1, 1), dt
+            cached = self._cache[dt] = F, FF, Q.reshape(-1, 1)
+        F, FF, Q = cached
         d, n = x.shape
-        return self._F @ x, (self._FF @ P.reshape(d * d, n) + self._Q).reshape(d, d, n)
+        return F @ x, (FF @ P.reshape(d * d, n) + Q).reshape(d, d, n)
 
 
 class ConstantVelocity(_Linear):
