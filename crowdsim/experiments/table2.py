@@ -12,7 +12,7 @@ account").
 Each row is scored twice: over every person (the seed's evaluation), and over the walking persons alone (persons
 slower than the initiation logic's v_min = 0.2 m/s ignored as the occluded are). Half of our airport's counted
 persons stand (queues, static groups, waiting passengers); the seed's PedSim sequence is "very dynamic", and the
-velocity gate of the initiation logic never starts a track on a standing person (Sec. V-B). The second table shows
+initiation logic's velocity gate is there not to start tracks on standing persons (Sec. V-B). The second table shows
 which of the claims turn on that difference.
 """
 
