@@ -43,9 +43,13 @@ def _cmd_run(args) -> int:
     return 0
 
 
+GROUP_FILES = ("relations.csv", "groups.csv")
+
+
 def _cmd_evaluate(args) -> int:
     import json
 
+    from evaluation.group_score import groups_table, score_groups
     from evaluation.io import EvaluationInputError, write_motchallenge
     from evaluation.score import (SEED000_COLUMNS, SEED001_COLUMNS, mean_sd, score_tracking, seeds_table,
                                   tracking_table)
@@ -61,6 +65,13 @@ def _cmd_evaluate(args) -> int:
         raise EvaluationInputError(f"--threshold: expected a distance above 0 m, got {args.threshold}")
     if bool(args.runs) == bool(args.gt or args.tracks) or (not args.runs and not (args.gt and args.tracks)):
         raise EvaluationInputError("expected either --gt GT.csv and --tracks TRACKS.csv, or --runs DIR [DIR ...]")
+    if bool(args.relations) != bool(args.groups) or (args.runs and args.relations):
+        raise EvaluationInputError("--relations and --groups: expected both, with --gt and --tracks (--runs scores "
+                                   "the groups of each run directory that has relations.csv and groups.csv)")
+
+    def group_scores(gt_path, tracks_path, relations_path, groups_path) -> dict:
+        return score_groups(gt_path, tracks_path, relations_path, groups_path, args.threshold,
+                            not args.no_occlusion, args.visible_column, args.max_range)
 
     def files(gt_path, tracks_path) -> CsvPair:
         return CsvPair(gt_path, tracks_path, occlusion=not args.no_occlusion, visible_column=args.visible_column,
@@ -76,16 +87,30 @@ def _cmd_evaluate(args) -> int:
         print()
         print(seeds_table(runs, SEED001_COLUMNS))
         mean, sd = mean_sd(runs)
+        report = {"runs": runs, "mean": mean, "sd": sd}
+        with_groups = [Path(d) for d in args.runs if all((Path(d) / f).is_file() for f in GROUP_FILES)]
+        if with_groups:
+            groups = [group_scores(*(d / f for f in ("groundtruth.csv", "tracks.csv", *GROUP_FILES)))
+                      for d in with_groups]
+            print(f"\ngroups of the {len(groups)} runs with {' and '.join(GROUP_FILES)}, one row each")
+            for d, g in zip(with_groups, groups):
+                print(f"{d}:\n{groups_table(g)}")
+            report["groups"] = {str(d): g for d, g in zip(with_groups, groups)}
         if args.json:
-            Path(args.json).write_text(json.dumps({"runs": runs, "mean": mean, "sd": sd}, indent=2) + "\n")
+            Path(args.json).write_text(json.dumps(report, indent=2) + "\n")
         return 0
     pair = files(args.gt, args.tracks)
     tracking = score_tracking(pair, args.threshold)
     print(tracking_table(tracking))
     print(f"{tracking['frames']} frames; {pair.gt_ignored} ground-truth rows ignored (occluded or out of range); "
           f"threshold {args.threshold:g} m")
+    report = {"tracking": tracking}
+    if args.relations:
+        report["groups"] = group_scores(args.gt, args.tracks, args.relations, args.groups)
+        print()
+        print(groups_table(report["groups"]))
     if args.json:
-        Path(args.json).write_text(json.dumps({"tracking": tracking}, indent=2) + "\n")
+        Path(args.json).write_text(json.dumps(report, indent=2) + "\n")
     if args.motchallenge:
         out = Path(args.motchallenge)
         out.mkdir(parents=True, exist_ok=True)
@@ -214,11 +239,31 @@ def _cmd_bench(args) -> int:
     return 0
 
 
+# --seeds left out: how many each experiment takes
+DEFAULT_SEEDS = {"train-detector": 20, "table2": 20, "train-relations": 20, "groups": 5}
+
+
 def _cmd_experiment(args) -> int:
     from .outdir import check_out_dir, write_directory
 
+    if args.seeds is None:
+        args.seeds = DEFAULT_SEEDS.get(args.what)
     if args.what == "train-detector":
         return _cmd_train_detector(args)
+    if args.what == "train-relations":
+        return _cmd_train_relations(args)
+    if args.what == "groups":
+        from .experiments.groups import held_out_seeds, run, write
+
+        if args.seeds < 1 or args.workers < 1:
+            raise UsageError(f"--seeds and --workers: expected at least 1, got {args.seeds} and {args.workers}")
+        seeds = held_out_seeds(args.seeds)
+        out = Path(args.out) if args.out else Path("runs") / f"groups-{time.strftime('%Y%m%d-%H%M%S')}"
+        check_out_dir(out)
+        results = run(seeds, args.duration or 60.0, workers=args.workers)
+        print(write_directory(out, lambda tmp: write(tmp, results, seeds)))
+        print(f"\n{out / 'groups.md'}, groups.json, groups.png")
+        return 0
     if args.what == "table2":
         from .experiments.table2 import table2, write
 
@@ -289,6 +334,37 @@ def _cmd_train_detector(args) -> int:
     print(report)
     print(f"{time.perf_counter() - t0:.0f} s; models: " + ", ".join(f"{p} ({p.stat().st_size / 1024:.0f} KiB)"
                                                                    for p in paths))
+    return 0
+
+
+def _cmd_train_relations(args) -> int:
+    from .outdir import check_out_dir, write_directory
+
+    if not 1 <= args.seeds <= 20 or args.workers < 1:
+        raise UsageError(f"--seeds: expected 1 to 20 training seeds (1100-1119), and --workers at least 1; got "
+                         f"{args.seeds} and {args.workers}")
+    out = Path(args.out) if args.out else None
+    if out is not None:
+        check_out_dir(out)
+    try:
+        import sklearn  # noqa: F401
+    except ImportError:
+        raise UsageError('experiment train-relations needs scikit-learn, of the train extra: '
+                         'pip install -e ".[train]"') from None
+    from pipeline.groups.relations import MODELS_DIR
+
+    from .experiments.relations import save_models, train
+
+    t0 = time.perf_counter()
+    models = train(args.seeds, args.duration or 60.0, workers=args.workers)
+    if out is None:
+        paths = save_models(models, MODELS_DIR)
+    else:
+        paths = [out / p.name for p in write_directory(out, lambda tmp: save_models(models, tmp))]
+    info = next(iter(models.values()))[1]
+    print(f"{info['pairs']} pairs of tracks ({info['related']} related) from seeds {info['train_seeds'][0]}-"
+          f"{info['train_seeds'][1]}; {time.perf_counter() - t0:.0f} s; models: "
+          + ", ".join(f"{p} ({p.stat().st_size / 1024:.0f} KiB)" for p in paths))
     return 0
 
 
@@ -369,8 +445,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the ground truth's visibility column: visible (any laser beam hit them, default) or "
                         "visible_seed000 (seed 000's rule: a laser point within 0.3 m of the position moved 0.2 m "
                         "towards the laser)")
-    p.add_argument("--json", help="write {\"tracking\": ...} with the keys of metrics.json to this new file (with "
-                                  "--runs: {\"runs\": [...], \"mean\": ..., \"sd\": ...})")
+    p.add_argument("--relations", help="relations CSV (frame,track_a,track_b,strength), with --groups: score the "
+                                       "groups too (the ground truth needs a group column)")
+    p.add_argument("--groups", help="groups CSV (frame,group,id: one row per member track)")
+    p.add_argument("--json", help="write {\"tracking\": ..., \"groups\": ...} with the keys of metrics.json to this "
+                                  "new file (with --runs: {\"runs\": [...], \"mean\": ..., \"sd\": ..., "
+                                  "\"groups\": {dir: ...}})")
     p.add_argument("--motchallenge", help="also export gt.txt and tracks.txt, MOTChallenge-style, into this new or "
                                           "empty directory")
     p.set_defaults(func=_cmd_evaluate)
@@ -430,30 +510,36 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--socnavgym-config", metavar="FILE", help="bench env: the SocNavGym environment config to use")
     p.set_defaults(func=_cmd_bench)
     p = sub.add_parser("experiment", help="experiments that take long: `experiment ppo` trains PPO on Navigate-v0, "
-                                          "`experiment train-detector` the laser_learned segment classifiers")
-    p.add_argument("what", choices=("ppo", "train-detector", "table2", "tune"),
+                                          "`experiment train-detector` the laser_learned segment classifiers, "
+                                          "`experiment train-relations` the group stage's relation classifiers")
+    p.add_argument("what", choices=("ppo", "train-detector", "table2", "tune", "train-relations", "groups"),
                    help="ppo: stable-baselines3 PPO on crowdsim/Navigate-v0 with the tracks observation, against "
                         "the random policy (needs [rl]); train-detector: AdaBoost and random-forest segment "
                         "classifiers on labelled airport scans, scored against laser_segments on held-out seeds "
                         "(needs [train]); table2: seed 000's Table II on the airport over --seeds seeds (from 1), "
-                        "its claims checked; tune: Optuna over the pipeline's parameters for MOTA (needs [tune])")
+                        "its claims checked; tune: Optuna over the pipeline's parameters for MOTA (needs [tune]); "
+                        "train-relations: the svm and forest relation classifiers on tracker output of airport seeds "
+                        "1100-1119 (needs [train]); groups: the group stage on held-out airport seeds (from 1200): "
+                        "each classifier against SPENCER's, each linkage, thresholds, tracker against true tracks")
     p.add_argument("--minutes", type=float, default=30.0, help="wall-clock training budget (default 30)")
     p.add_argument("--envs", type=int, default=8, help="environments stepped together (default 8)")
     p.add_argument("--people", type=int, default=10, help="people per environment (default 10)")
     p.add_argument("--seed", type=int, default=0, help="training seed (evaluation seeds are disjoint)")
     p.add_argument("--eval-episodes", type=int, default=100, help="evaluation episodes per policy (default 100)")
-    p.add_argument("--out", help="output directory (default runs/<what>-<time>; train-detector: the shipped models, "
-                                 "pipeline/detectors/models/, replaced); must be new or empty")
-    p.add_argument("--seeds", type=int, default=20, help="train-detector: training seeds, from 1000 (default 20); "
-                                                        "table2: seeds from 1")
-    p.add_argument("--duration", type=float, help="table2 and tune: s of each airport run (default: the "
-                                                  "scenario's; tune: 60)")
+    p.add_argument("--out", help="output directory (default runs/<what>-<time>; train-detector and train-relations: "
+                                 "the shipped models, pipeline/detectors/models/ or pipeline/groups/models/, "
+                                 "replaced); must be new or empty")
+    p.add_argument("--seeds", type=int, help="train-detector: training seeds, from 1000 (default 20); table2: seeds "
+                                             "from 1 (default 20); train-relations: training seeds, from 1100 "
+                                             "(default 20); groups: held-out seeds, from 1200 (default 5)")
+    p.add_argument("--duration", type=float, help="table2, tune, train-relations and groups: s of each airport run "
+                                                  "(default: the scenario's; the others: 60)")
     p.add_argument("--trials", type=int, default=50, help="tune: trials (default 50)")
     p.add_argument("--storage", help="tune: an Optuna storage to keep and resume the study, e.g. sqlite:///study.db")
     p.add_argument("--quick", action="store_true", help="train-detector: 4 short training seeds, 1 validation and "
                                                         "1 test seed (a smoke test, not models to ship)")
-    p.add_argument("--workers", type=int, default=2, help="train-detector: processes running the simulations "
-                                                          "(default 2)")
+    p.add_argument("--workers", type=int, default=2, help="train-detector, table2, train-relations and groups: "
+                                                          "processes running the simulations (default 2)")
     p.set_defaults(func=_cmd_experiment)
     p = sub.add_parser("dataset", help="labelled datasets: generate, export, evaluate-detector "
                                        "(docs/dataset-format.md)")

@@ -29,8 +29,8 @@ from pipeline.fusion import to_frame
 from pipeline.frames import inverse, transform_points
 from pipeline.navigation.follow import PersonFollower
 from pipeline.navigation.planners import build_planner
-from pipeline.types import (CameraFrame, DepthFrame, DetectedPersons, GroundTruthTags, LaserScan, TagReading,
-                            TrackedPersons, Visibility)
+from pipeline.types import (CameraFrame, DepthFrame, DetectedPersons, GroundTruthTags, LaserScan, SocialRelations,
+                            TagReading, TrackedGroups, TrackedPersons, Visibility)
 from scenarios.geometry import closest_on_segments, wall_segments
 from sensors import Laser, Scene, parts_at
 from sensors.body import body_scale
@@ -60,6 +60,8 @@ class Frame:
     scans: list[LaserScan]
     detections: DetectedPersons  # fused, odom
     tracks: TrackedPersons  # odom
+    relations: SocialRelations  # between the tracks
+    groups: TrackedGroups  # of the tracks, odom
     groundtruth: TrackedPersons  # persons within range and GT_MARGIN beyond, odom
     gt_tags: GroundTruthTags  # their range, beams and occlusion, for the evaluation
     score: FrameResult
@@ -86,6 +88,7 @@ class Timing:
     wall_s: float = 0.0
     tracker_s: float = 0.0
     tracker_cycles: int = 0
+    groups_s: float = 0.0
     sensors_s: float = 0.0
     crowd_s: float = 0.0
 
@@ -272,12 +275,15 @@ class Simulation:
         tracks = self.pipeline.tracker.update(stamp, detections)
         self.timing.tracker_s += time.perf_counter() - t3
         self.timing.tracker_cycles += 1
+        t4 = time.perf_counter()
+        relations, groups = self.pipeline.groups.update(stamp, tracks)
+        self.timing.groups_s += time.perf_counter() - t4
         gt, near = self._groundtruth(agents)
         visibility = self._visibility(agents)
         tags = self._tags(agents, near, scans, visibility)
         score = self.clearmot.update(gt.track_id, gt.position, tracks.track_id, tracks.position, tags.ignore)
         frame = Frame(self._frame, stamp, self.robot.pose.copy(), self.robot.world_T_odom, agents, scans,
-                      detections, tracks, gt, tags, score, visibility, self._pending_depth, self._pending_camera,
+                      detections, tracks, relations, groups, gt, tags, score, visibility, self._pending_depth, self._pending_camera,
                       collision=self._collided, detector_outputs=outputs)
         if self.planner is not None:
             self._navigate(frame)

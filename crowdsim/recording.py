@@ -88,6 +88,15 @@ class Recording:
         rec.log("world/tracks", rr.Points2D(pos, radii=0.2, class_ids=ids % 256, labels=[f"T{i}" for i in ids]))
         rec.log("world/tracks/velocity", rr.Arrows2D(origins=pos, vectors=vel, class_ids=ids % 256))
         rec.log("world/tracks/covariance", rr.LineStrips2D(list(covariance_ellipses(pos, cov)), class_ids=ids % 256))
+        g = frame.groups
+        centroid = transform_points(w, g.centroid)
+        members = pos[np.argsort(ids)][np.searchsorted(np.sort(ids), g.member_track)]
+        at = np.searchsorted(g.group_id, g.member_group, sorter=np.argsort(g.group_id))
+        hub = centroid[np.argsort(g.group_id)[at]] if len(g.group_id) else np.zeros((0, 2))
+        rec.log("world/groups", rr.LineStrips2D(list(np.stack([hub, members], axis=1)),
+                                                class_ids=g.member_group % 256, radii=0.04))
+        rec.log("world/groups/id", rr.Points2D(centroid, radii=0.08, class_ids=g.group_id % 256,
+                                               labels=[f"G{i} ({a:.0f} s)" for i, a in zip(g.group_id, g.age)]))
         rec.log("world/odom", rr.Arrows2D(origins=[w[:2]] * 2, vectors=[compose(w, [1, 0, 0])[:2] - w[:2],
                                                                        compose(w, [0, 1, 0])[:2] - w[:2]],
                                           colors=[[255, 0, 0], [0, 255, 0]]))

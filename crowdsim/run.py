@@ -25,6 +25,7 @@ from tqdm import tqdm
 from evaluation.heap import release_memory
 from evaluation.navigation import navigation_metrics, read_nav_run
 from evaluation.navigation_report import json_safe
+from evaluation.group_score import groups_table, score_groups
 from evaluation.score import score_tracking, tracking_table
 from evaluation.stream import CsvPair
 from pipeline.frames import compose, inverse
@@ -37,7 +38,15 @@ CSV_HEADER = "frame,t,id,x,y,vx,vy"
 # the ground truth adds, per person, the true distance from the robot, whether within the evaluation's range, the
 # laser beams that hit them this cycle (all lasers), whether any did, and seed 000's own occlusion test: the
 # evaluation ignores persons out of range or physically occluded (evaluation/io.py)
-GT_HEADER = CSV_HEADER + ",range,in_range,beams,visible,visible_seed000"
+GT_HEADER = CSV_HEADER + ",range,in_range,beams,visible,visible_seed000,group"
+# the group stage's output (odom): the relations between tracks within RELATIONS_WRITTEN of each other (farther pairs
+# are past the gates, strength 0.1, and a pair of persons the group scores look at, within 3 m, has its tracks within
+# 3 m + twice the 1 m matching threshold), and one row per member of each group of two or more, with the group's
+# centroid and age
+RELATIONS_HEADER = "frame,t,track_a,track_b,strength"
+RELATIONS_FORMAT = ["%d", "%.2f", "%d", "%d", "%.6f"]
+RELATIONS_WRITTEN = 5.0  # m
+GROUPS_HEADER = "frame,t,group,id,x,y,age"
 DETECTIONS_HEADER = "frame,t,id,x,y,confidence"  # the fused detections the tracker was given, odom
 # the robot's true pose in the world and its odometry pose in odom (what the pipeline saw), per tracking cycle
 ROBOT_HEADER = "frame,t,x,y,yaw,odom_x,odom_y,odom_yaw"
@@ -63,7 +72,7 @@ def _rows(frame_index: int, stamp: float, persons) -> np.ndarray:
                             persons.velocity])
 
 
-INTEGER_COLUMNS = {"id", "in_range", "beams", "visible", "visible_seed000", "target_track", "target_visible"}
+INTEGER_COLUMNS = {"id", "in_range", "beams", "visible", "visible_seed000", "target_track", "target_visible", "group"}
 
 
 def _without_unset(value):
@@ -73,6 +82,29 @@ def _without_unset(value):
     if isinstance(value, list):
         return [_without_unset(v) for v in value]
     return value
+
+
+def _row_of(ids: np.ndarray, query: np.ndarray) -> np.ndarray:
+    """The row of each of ``query`` in ``ids`` (unique, any order; every query among them)."""
+    order = np.argsort(ids)
+    return order[np.searchsorted(ids[order], query)]
+
+
+def _relation_rows(frame) -> np.ndarray:
+    r, tracks = frame.relations, frame.tracks
+    a, b = _row_of(tracks.track_id, r.track_a), _row_of(tracks.track_id, r.track_b)
+    near = np.hypot(*(tracks.position[a] - tracks.position[b]).T) <= RELATIONS_WRITTEN
+    n = int(near.sum())
+    return np.column_stack([np.full(n, frame.index), np.full(n, frame.stamp), r.track_a[near], r.track_b[near],
+                            r.strength[near]])
+
+
+def _group_rows(frame) -> np.ndarray:
+    g = frame.groups
+    k = _row_of(g.group_id, g.member_group)
+    n = len(k)
+    return np.column_stack([np.full(n, frame.index), np.full(n, frame.stamp), g.member_group, g.member_track,
+                            g.centroid[k], g.age[k]])
 
 
 def _detection_rows(frame) -> np.ndarray:
@@ -108,7 +140,7 @@ def _gt_rows(frame) -> np.ndarray:
     """Ground-truth rows with their range and occlusion tags."""
     tags = frame.gt_tags
     return np.column_stack([_rows(frame.index, frame.stamp, frame.groundtruth), tags.range, tags.in_range,
-                            tags.beams, tags.visible, tags.visible_seed000])
+                            tags.beams, tags.visible, tags.visible_seed000, frame.groundtruth.group_id])
 
 
 def _visibility_rows(frame, written: dict[str, float]) -> list[np.ndarray]:
@@ -206,9 +238,11 @@ def _one_row(table: str) -> str:
 
 
 def summary_table(metrics: dict) -> str:
+    """The tracking table and, below it, the groups table."""
     tm = metrics["timing"]
-    return tracking_table(metrics["tracking"], {"tracker Hz": f"{tm['tracker_hz']:.0f}",
-                                                "real-time factor": f"{tm['realtime_factor']:.2f}x"})
+    return (tracking_table(metrics["tracking"], {"tracker Hz": f"{tm['tracker_hz']:.0f}",
+                                                 "real-time factor": f"{tm['realtime_factor']:.2f}x"})
+            + "\n\n" + groups_table(metrics["groups"], {"groups ms/cycle": f"{tm['groups_ms_per_cycle']:.2f}"}))
 
 
 def cameras_line(metrics: dict, before: str = "") -> str:
@@ -240,6 +274,8 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     csv = {"groundtruth": CsvWriter(tmp / "groundtruth.csv", GT_HEADER),
            "tracks": CsvWriter(tmp / "tracks.csv", CSV_HEADER),
            "detections": CsvWriter(tmp / "detections.csv", DETECTIONS_HEADER),
+           "relations": CsvWriter(tmp / "relations.csv", RELATIONS_HEADER, RELATIONS_FORMAT),
+           "groups": CsvWriter(tmp / "groups.csv", GROUPS_HEADER),
            "robot": CsvWriter(tmp / "robot.csv", ROBOT_HEADER),
            "visibility": CsvWriter(tmp / "visibility.csv", VISIBILITY_HEADER, VISIBILITY_FORMAT, {3: sensors})}
     navigating = sim.driver != "route"
@@ -259,6 +295,8 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
             csv["groundtruth"].write(_gt_rows(frame))
             csv["tracks"].write(_rows(frame.index, frame.stamp, frame.tracks))
             csv["detections"].write(_detection_rows(frame))
+            csv["relations"].write(_relation_rows(frame))
+            csv["groups"].write(_group_rows(frame))
             csv["robot"].write(_robot_row(frame))
             for rows in _visibility_rows(frame, written):
                 csv["visibility"].write(rows)
@@ -296,6 +334,8 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     # scored from the files as written, so that `crowdsim evaluate` on them gives the same figures
     tracking = score_tracking(CsvPair(tmp / "groundtruth.csv", tmp / "tracks.csv"),
                               scenario["evaluation"]["threshold"])
+    groups = score_groups(*(tmp / f"{name}.csv" for name in ("groundtruth", "tracks", "relations", "groups")),
+                          scenario["evaluation"]["threshold"])
     release_memory()  # and the scoring's memory before the drawing's
     from .plot import plot_run  # matplotlib, imported once the scoring is done: 20 MB less at its peak
 
@@ -307,6 +347,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         "duration_s": duration,
         "frames": frames,  # tracking cycles (tracking.frames: those with any ground truth or track)
         "tracking": tracking,
+        "groups": groups,
         "groundtruth": {"mean_persons_in_range": persons / frames if frames else 0.0,
                         "max_persons_in_range": most},
         # which renderer drew each camera: egl or osmesa (MuJoCo's OpenGL), or raycast where no GL context was had
@@ -315,6 +356,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
             "wall_s": timing.wall_s,
             "realtime_factor": duration / timing.wall_s if timing.wall_s > 0 else float("inf"),
             "tracker_hz": timing.tracker_cycles / timing.tracker_s if timing.tracker_s > 0 else float("inf"),
+            "groups_ms_per_cycle": 1e3 * timing.groups_s / max(timing.tracker_cycles, 1),
             "crowd_s": timing.crowd_s,
             "sensors_s": timing.sensors_s,
             "warmup_wall_s": warmup_s,

@@ -1,10 +1,10 @@
 """``crowdsim report``: a run's metrics as tables and pictures people can look at.
 
-From the files a run writes (groundtruth.csv, tracks.csv, detections.csv, robot.csv), re-scored here frame by frame:
-report.md with the tracking tables (seed 000's set at the run's threshold, seed 001's at 0.3 m, identity and
-trajectory measures), a top-down picture of what happened (ground truth thin, tracks coloured by id, ID switches
-and false positives marked), the per-frame counts, the metrics over time, and an animated SVG top-down view
-(evaluation/svg.py).
+From the files a run writes (groundtruth.csv, tracks.csv, detections.csv, robot.csv; groups.csv where the run has
+one, older runs have none), re-scored here frame by frame: report.md with the tracking tables (seed 000's set at the
+run's threshold, seed 001's at 0.3 m, identity and trajectory measures), a top-down picture of what happened (ground
+truth thin, tracks coloured by id, ID switches and false positives marked), the per-frame counts, the metrics over
+time, and an animated SVG top-down view (evaluation/svg.py), with the tracked groups where there is groups.csv.
 Everything is drawn in the tracking frame (odom); walls are moved there with the first cycle's true odom pose.
 """
 
@@ -27,6 +27,7 @@ from .stream import CsvPair  # noqa: E402
 from .svg import write_svg  # noqa: E402
 
 TRACK_COLUMNS = ("frame", "t", "id", "x", "y", "vx", "vy")
+GROUP_COLUMNS = ("frame", "t", "group", "id", "x", "y")  # groups.csv's; age is not drawn
 ROBOT_COLUMNS = ("frame", "t", "x", "y", "yaw", "odom_x", "odom_y", "odom_yaw")
 SEED001_THRESHOLD = 0.3  # m, seed 001 Sec. 4: "within a 30 cm radius of the ground truth"
 
@@ -172,7 +173,7 @@ def write_report(out: Path, run_dir: Path, walls: np.ndarray, threshold: float, 
               groundtruth=_columns(run_dir / "groundtruth.csv", TRACK_COLUMNS),
               detections=_columns(run_dir / "detections.csv", TRACK_COLUMNS[:5]),
               robot=np.column_stack([robot["t"], robot["odom_x"], robot["odom_y"]]) if len(robot["frame"]) else None,
-              walls=walls, title=title)
+              walls=walls, groups=_columns(run_dir / "groups.csv", GROUP_COLUMNS), title=title)
     ignored = int(gt.ignore.sum())
     lines = [
         f"# Tracking report: {title}", "",
@@ -197,7 +198,9 @@ def write_report(out: Path, run_dir: Path, walls: np.ndarray, threshold: float, 
         "false positives as red dots](topdown_tracking.png)", "",
         "![per-frame counts](counts.png)", "", "![metrics over time](over_time.png)", "",
         "[topdown.svg](topdown.svg): the run animated, to open in a browser and zoom into (detections as diamonds "
-        "with their id and time, tracks with velocity arrows every second, the robot's odometry in grey).", "",
+        "with their id and time, tracks with velocity arrows every second, the robot's odometry in grey"
+        + (", each tracked group's members joined to its centroid, labelled G and its id"
+           if (run_dir / "groups.csv").exists() else "") + ").", "",
     ]
     (out / "report.md").write_text("\n".join(lines))
     (out / "tracking.json").write_text(json.dumps({"tracking": tracking, "seed001": seed001}, indent=2) + "\n")

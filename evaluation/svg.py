@@ -10,24 +10,32 @@ title and the clock and one below for the scale bar; at 100 % zoom 1 m is 30 px,
 
 Drawn, bottom to top: walls; the robot's odometry (wide, light grey); the ground truth (thin, grey); each track as
 a polyline in a colour of its id, with the id at its start and end and a velocity arrow every 1 s (a line from the
-position to where the velocity leads in 0.5 s, with a head: its length is the speed); detections as small diamonds;
-their "id time" labels, in a layer of their own above all diamonds; when animated, a marker per ground-truth
-person, the robot and each track (with its id), and the clock; the scale bar and the title. At 25 Hz a walking
-person's detections are 5 cm apart and a label 12 cm long, so each label is turned across the step from the
-nearest detection of the frame before: a person's labels stack like the rungs of a ladder, each one readable.
+position to where the velocity leads in 0.5 s, with a head: its length is the speed); the tracked groups
+(groups.csv), each a line from every member's position (its track's row of the same cycle) to the group's centroid
+in a colour of the group's id, with "G<id>" at the centroid: when animated those of each cycle in turn, else those
+of the window's last cycle; detections as small diamonds; their "id time" labels, in a layer of their own above all
+diamonds; when animated, a marker per ground-truth person, the robot and each track (with its id), and the clock;
+the scale bar and the title. At 25 Hz a walking person's detections are 5 cm apart and a label 12 cm long, so each
+label is turned across the step from the nearest detection of the frame before: a person's labels stack like the
+rungs of a ladder, each one readable.
 
 Animation: the trajectories are drawn whole from the start, as the map of the window; what moves is
   * a marker per track, ground-truth person and the robot: one <animateMotion> from the first row to one frame
     after the last, positions sampled every 0.2 s (no keyTimes: 5x smaller than one key per 25 Hz row);
   * the detections of each frame, shown from their time for 1 s (a trail), one <set> per frame and layer;
+  * the groups of a tracking cycle, shown from its time until the next cycle drawn, one <set> per cycle; the
+    cycles are sampled as the markers are, at most every 0.2 s (counted back from the last cycle, which is always
+    drawn and stays on at the end): at most 5 a second instead of 12.5 keeps a 120 s run with 10 groups of 3 a
+    cycle to about 1 MB;
   * a clock in 0.1 s steps.
 Every animation begins at its rows' time minus the window's start; it plays once and holds at the end, where every
-detection is shown, so the last frame is the whole window to zoom into. Why this design: the work of an animation
-frame stays bounded however long the window, since the browser has only the animations now active to update
-(markers alive, the last second of detections) and only what is shown to paint; what is not shown yet is
-display:none, not even laid out. The SPENCER exporter's way, every element fading in and staying, makes each frame
-cost more than the last: in headless Chromium (software raster) a 30 s window of 80 people played at 28 frames/s
-throughout, and at 20, 6 and 2 frames/s after 2, 14 and 25 s when the detections stay on.
+detection is shown, so the last frame is the whole window to zoom into (with the groups of its last cycle). Why
+this design: the work of an animation frame stays bounded however long the window, since the browser has only the
+animations now active to update (markers alive, the last second of detections, one cycle's groups) and only what is
+shown to paint; what is not shown yet is display:none, not even laid out. The SPENCER exporter's way, every element
+fading in and staying, makes each frame cost more than the last: in headless Chromium (software raster) a 30 s
+window of 80 people played at 28 frames/s throughout, and at 20, 6 and 2 frames/s after 2, 14 and 25 s when the
+detections stay on.
 """
 
 from __future__ import annotations
@@ -44,6 +52,7 @@ PX_PER_UNIT = 0.3  # 30 px per metre at 100 % zoom
 ARROW_EVERY_S = 1.0
 ARROW_LEAD_S = 0.5  # a velocity arrow reaches where the velocity leads in this time
 MOTION_STEP_S = 0.2  # markers' positions are sampled this often; linear in between
+GROUP_STEP_S = 0.2  # the groups layer draws a tracking cycle at most this often
 TRAIL_S = 1.0  # how long a frame's detections stay on while the animation plays
 CLOCK_STEP_S = 0.1
 DIAMOND = 3.0  # half the diagonal of a detection's diamond, user units
@@ -157,6 +166,64 @@ def _detections(det: np.ndarray, t_lo: float, t_end: float, animate: bool) -> tu
     return shapes, labels
 
 
+def _members(grp: np.ndarray, trf: np.ndarray) -> np.ndarray:
+    """Positions [n, 2] (m) of the members of group rows [frame, t, group, id, x, y]: the row of the same frame and
+    track id in track rows [frame, t, id, x, y, ...]; NaN where there is none."""
+    out = np.full((len(grp), 2), np.nan)
+    trf = trf[np.isfinite(trf[:, 0])]
+    if not len(grp) or not len(trf):
+        return out
+    keys = np.concatenate([trf[:, [0, 2]], grp[:, [0, 3]]])
+    code = np.unique(keys, axis=0, return_inverse=True)[1].ravel()
+    at = np.full((code.max() + 1, 2), np.nan)
+    at[code[:len(trf)]] = trf[:, 3:5]
+    return at[code[len(trf):]]
+
+
+def _cycles(times: np.ndarray, animate: bool) -> np.ndarray:
+    """The tracking cycles' times whose groups are drawn: back from the last, none closer than GROUP_STEP_S to the
+    one after it; when not animated, the last alone."""
+    if not len(times) or not animate:
+        return times[-1:]
+    picked = [times[-1]]
+    for t in times[-2::-1].tolist():
+        if t <= picked[-1] - GROUP_STEP_S + 1e-9:
+            picked.append(t)
+    return np.array(picked[::-1])
+
+
+def _groups(grp: np.ndarray, member: np.ndarray, cycles: np.ndarray, t_lo: float, animate: bool) -> list[str]:
+    """Per drawn cycle of group rows [frame, t, group, id, x, y] with their members' positions [n, 2]: a <g> with,
+    per group, a path from each member found to the centroid and "G<id>" at the centroid; when animated shown from
+    the cycle's time until the next drawn cycle's, the last one for good."""
+    pick = np.isin(grp[:, 1], cycles)
+    order = np.lexsort((grp[pick, 3], grp[pick, 2], grp[pick, 1]))
+    grp, member = grp[pick][order], member[pick][order]
+    out = []
+    for f in np.split(np.arange(len(grp)), np.flatnonzero(np.diff(grp[:, 1])) + 1):
+        if not len(f):
+            continue
+        t = grp[f[0], 1]
+        if animate:
+            k = int(np.searchsorted(cycles, t))
+            dur = cycles[k + 1] - t if k + 1 < len(cycles) else None
+            head = f'<g display="none">{_show(t - t_lo, dur, freeze=dur is None)}'
+        else:
+            head = "<g>"
+        body = []
+        for g in np.split(f, np.flatnonzero(np.diff(grp[f, 2])) + 1):
+            i, c = grp[g[0], 2], _colour(grp[g[0], 2])
+            hub = _uu(grp[g[:1], 4:6])[0]
+            m = _uu(member[g])
+            m = m[np.isfinite(m).all(1)]
+            if len(m):
+                q = np.column_stack([m, np.broadcast_to(hub, m.shape)])
+                body.append(f'<path stroke="{c}" d="{"M%.1f,%.1fL%.1f,%.1f" * len(q) % tuple(q.ravel())}"/>')
+            body.append(f'<text x="{hub[0]:.1f}" y="{hub[1]:.1f}" fill="{c}">G{i:.0f}</text>')
+        out.append(head + "".join(body) + "</g>")
+    return out
+
+
 def _clock(t_lo: float, t_end: float) -> list[str]:
     """One text per CLOCK_STEP_S, each shown for its step; the last one stays."""
     n = int(np.floor(t_end / CLOCK_STEP_S + 1e-9)) + 1
@@ -172,22 +239,25 @@ def _nice(x: float) -> float:
 
 def write_svg(path, *, tracks: np.ndarray, detections: np.ndarray | None = None,
               groundtruth: np.ndarray | None = None, robot: np.ndarray | None = None,
-              walls: np.ndarray | None = None, start: float | None = None, end: float | None = None,
-              animate: bool = True, title: str = "") -> None:
+              walls: np.ndarray | None = None, groups: np.ndarray | None = None, start: float | None = None,
+              end: float | None = None, animate: bool = True, title: str = "") -> None:
     """Write the top-down view of a run to ``path``; all positions in one frame of reference, metres.
 
     ``tracks`` and ``groundtruth``: rows (frame, t, id, x, y, vx, vy); ``detections``: (frame, t, id, x, y);
-    ``robot``: odometry rows (t, x, y); ``walls``: segments [k, 2, 2]. Only rows with ``start <= t <= end``
+    ``robot``: odometry rows (t, x, y); ``walls``: segments [k, 2, 2]; ``groups``: rows (frame, t, group, id, x,
+    y[, age]) as groups.csv holds them, one per member track ``id`` of each group, (x, y) the group's centroid; the
+    members are drawn where the tracks' rows of the same frame and id put them. Only rows with ``start <= t <= end``
     (seconds; by default the first and last time of any row) are drawn, and the animation's time 0 is ``start``.
     Rows with a non-finite time or position are left out.
     """
-    tr = _rows(tracks, 7, "tracks")[:, 1:]  # from here on: t, id, x, y, ...
+    trf = _rows(tracks, 7, "tracks")  # with the frame, to find the groups' members
+    grp = _rows(groups, 6, "groups")  # frame, t, group, id, x, y
     gt = _rows(groundtruth, 7, "groundtruth")[:, 1:]
     det = _rows(detections, 5, "detections")[:, 1:]
     rb = _rows(robot, 3, "robot")
     rb = np.column_stack([rb[:, 0], np.zeros(len(rb)), rb[:, 1:]])
     walls = np.zeros((0, 2, 2)) if walls is None else np.asarray(walls, dtype=np.float64).reshape(-1, 2, 2)
-    every = np.concatenate([a[:, 0] for a in (tr, gt, det, rb)])
+    every = np.concatenate([a[:, 0] for a in (trf[:, 1:], gt, det, rb, grp[:, 1:])])
     t_lo = float(start) if start is not None else float(every.min()) if every.size else 0.0
     t_hi = float(end) if end is not None else float(every.max()) if every.size else t_lo
     if t_hi < t_lo:
@@ -196,14 +266,16 @@ def write_svg(path, *, tracks: np.ndarray, detections: np.ndarray | None = None,
     def window(a):
         return a[(a[:, 0] >= t_lo) & (a[:, 0] <= t_hi) & np.isfinite(a[:, :4]).all(1)]
 
-    tr, gt, det, rb = window(tr), window(gt), window(det), window(rb)
+    trf = trf[(trf[:, 1] >= t_lo) & (trf[:, 1] <= t_hi) & np.isfinite(trf[:, 1:5]).all(1)]
+    grp = grp[(grp[:, 1] >= t_lo) & (grp[:, 1] <= t_hi) & np.isfinite(grp).all(1)]
+    tr, gt, det, rb = trf[:, 1:], window(gt), window(det), window(rb)
     rb = rb[np.argsort(rb[:, 0], kind="stable")]
     tracks_by_id, gt_by_id = list(_by_id(tr)), list(_by_id(gt))
     t_end = t_hi - t_lo
     times = np.unique(np.concatenate([tr[:, 0], gt[:, 0], det[:, 0]]))
     dt = float(np.median(np.diff(times))) if times.size > 1 else CLOCK_STEP_S  # one frame
 
-    xy = np.concatenate([a[:, 2:4] for a in (tr, gt, det, rb)] + [walls.reshape(-1, 2)])
+    xy = np.concatenate([a[:, 2:4] for a in (tr, gt, det, rb)] + [grp[:, 4:6], walls.reshape(-1, 2)])
     xy = xy[np.isfinite(xy).all(1)]
     lo, hi = (xy.min(0), xy.max(0)) if len(xy) else (np.zeros(2), np.zeros(2))
     x0, y0 = lo[0] * UNITS_PER_M - _MARGIN, -hi[1] * UNITS_PER_M - _MARGIN - _TOP
@@ -229,9 +301,12 @@ def write_svg(path, *, tracks: np.ndarray, detections: np.ndarray | None = None,
         out.append(f'<g stroke="{c}"><polyline points="{_pts(p)}"/><path d="{_arrows(g[:, 0], g[:, 2:4], g[:, 4:6])}"/>'
                    f'<text x="{p[0, 0] + 10:.0f}" y="{p[0, 1] - 10:.0f}" fill="{c}" stroke="none">{i:.0f}</text>'
                    f'<text x="{p[-1, 0] + 10:.0f}" y="{p[-1, 1] - 10:.0f}" fill="{c}" stroke="none">{i:.0f}</text></g>')
+    cycles = _cycles(np.unique(np.concatenate([tr[:, 0], grp[:, 1]])), animate)
+    out += ['</g></g><g id="groups" fill="none" stroke-width="3" font-size="25" font-weight="bold" '
+            'text-anchor="middle">', *_groups(grp, _members(grp, trf), cycles, t_lo, animate)]
     shapes, labels = _detections(det, t_lo, t_end, animate)
     # a white outline keeps overlapping diamonds apart; none on the labels: Firefox plays 7 frames/s with it, 32 without
-    out += ['</g></g><g id="detections" fill="#222" stroke="white" stroke-width="0.6">', *shapes,
+    out += ['</g><g id="detections" fill="#222" stroke="white" stroke-width="0.6">', *shapes,
             '</g><g id="detection-labels" fill="#222" font-size="4">', *labels]
     out.append("</g>")
     if animate:

@@ -1,4 +1,4 @@
-"""The pipeline as parts: the interfaces of detectors, fusion and trackers, the built-in types by name, and
+"""The pipeline as parts: the interfaces of detectors, fusion, trackers and the group stage, the built-in types by name, and
 ``build_pipeline``, which makes the parts a scenario's (validated) ``pipeline`` section names.
 
 A part is named by its type, a built-in one below or ``module.path:ClassName``, and made as ``cls(**params)`` with
@@ -16,10 +16,12 @@ from scenarios.schema import import_class
 from .detectors.laser_segments import SegmentDetector
 from .detectors.learned_segments import LearnedSegmentDetector
 from .fusion import NearestFusion
+from .groups import CoherentMotionGroups
 from .map_filter import MapFilter
 from .tracking.mht import MultiHypothesisTracker
 from .tracking.nnt import NearestNeighbourTracker
-from .types import CameraFrame, DepthFrame, DetectedPersons, LaserScan, TrackedPersons
+from .types import (CameraFrame, DepthFrame, DetectedPersons, LaserScan, SocialRelations, TrackedGroups,
+                    TrackedPersons)
 
 
 class Detector(Protocol):
@@ -48,9 +50,18 @@ class Tracker(Protocol):
     def reset(self) -> None: ...
 
 
+class GroupStage(Protocol):
+    """Turns each cycle's tracks into the relations between them and the groups they form."""
+
+    def update(self, stamp: float, tracks: TrackedPersons) -> tuple[SocialRelations, TrackedGroups]: ...
+
+    def reset(self) -> None: ...
+
+
 DETECTORS: dict[str, type] = {"laser_segments": SegmentDetector, "laser_learned": LearnedSegmentDetector}
 FUSIONS: dict[str, type] = {"nearest": NearestFusion}
 TRACKERS: dict[str, type] = {"nnt": NearestNeighbourTracker, "mht": MultiHypothesisTracker}
+GROUP_STAGES: dict[str, type] = {"coherent_motion": CoherentMotionGroups}
 
 
 @dataclass
@@ -61,11 +72,12 @@ class Pipeline:
     detectors: dict[str, Detector]
     fusion: Fusion
     tracker: Tracker
+    groups: GroupStage
     map_filter: MapFilter | None = None
 
     def reset(self) -> None:
         """Every part starts over (ids, tracks, counters), as for a new run."""
-        for part in (*self.detectors.values(), self.fusion, self.tracker):
+        for part in (*self.detectors.values(), self.fusion, self.tracker, self.groups):
             part.reset()
 
 
@@ -86,4 +98,4 @@ def build_pipeline(spec: dict, lasers: Sequence[str], floor_plan: dict | None = 
     map_filter = (MapFilter(floor_plan["walls"], floor_plan["obstacles"], **spec["map_filter"])
                   if spec["map_filter"] is not None and floor_plan is not None else None)
     return Pipeline(detectors, build_part(spec["fusion"], FUSIONS), build_part(spec["tracker"], TRACKERS),
-                    map_filter)
+                    build_part(spec["groups"], GROUP_STAGES), map_filter)

@@ -225,7 +225,8 @@ class SocialRelations:
 
 @dataclass
 class TrackedGroups:
-    """Groups as sets of track ids with a centroid; ``member_group[i]`` is the group of ``member_track[i]``."""
+    """Groups as sets of track ids with a centroid; ``member_group[i]`` is the group of ``member_track[i]``;
+    ``age`` (s) is how long each group's exact member set has existed (SPENCER's TrackedGroup.age)."""
 
     stamp: float
     frame: str
@@ -233,3 +234,4 @@ class TrackedGroups:
     centroid: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     member_group: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     member_track: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    age: np.ndarray = field(default_factory=lambda: np.zeros(0))

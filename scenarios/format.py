@@ -449,10 +449,35 @@ MAP_FILTER = Schema({
                           "0: any occupied cell rejects)"),
 })
 
+# the group stage (pipeline/groups: relations, detection, composition tracking; SPENCER's defaults, a test keeps
+# them equal to the class's)
+COHERENT_MOTION = Schema({
+    "model": F("str", "svm",
+               doc="relation classifier: svm (ours: linear SVM on cubic monomials + Platt, trained on tracker output "
+                   "by `crowdsim experiment train-relations`), forest (ours: random forest), spencer (SPENCER's "
+                   "released linear SVM, groups_probabilistic_small.model), or the path of a model train-relations "
+                   "wrote"),
+    "threshold": F("float", 0.5, min=0.0, max=1.0,
+                   doc="least relation strength that joins two tracks (SPENCER's tracked_groups.py: 0.5)"),
+    "linkage": F("str", "single", choices=("single", "complete", "average"),
+                 doc="single: groups are the connected components (SPENCER's); complete/average: each component "
+                     "clustered again so a queue of strangers does not chain (pipeline/groups/detection.py)"),
+    "smoothing": F("bool", False, doc="SPENCER's long-term relations: strengths rise and fall at limited rates"),
+    "max_distance": F("float", 3.0, min=0.0, doc="m, farther pairs get strength 0.1 (SPENCER's gate)"),
+    "max_speed_difference": F("float", 1.0, min=0.0, doc="m/s, pairs with speeds further apart get 0.1"),
+    "max_heading_difference": F("float", 0.7853981633974483, min=0.0,
+                                doc="rad, pairs with headings further apart get 0.1 (SPENCER's: pi/4)"),
+    "min_speed": F("float", 0.1, min=0.0, doc="m/s, a slower track's heading is taken as 0 (SPENCER's)"),
+    "memory": F("int", 300, min=1, doc="member sets the composition tracker remembers (SPENCER's: 300)"),
+})
+
+GROUP_STAGE_TYPES = {"coherent_motion": COHERENT_MOTION}
+
 # the methods a class of one's own must have (pipeline/assemble.py's protocols; a test keeps them equal)
 DETECTOR = Typed(DETECTOR_TYPES, "laser_segments", "detector", ("detect", "reset"))
 FUSION = Typed(FUSION_TYPES, "nearest", "fusion", ("fuse", "reset"))
 TRACKER = Typed(TRACKER_TYPES, "nnt", "tracker", ("update", "reset"))
+GROUP_STAGE = Typed(GROUP_STAGE_TYPES, "coherent_motion", "groups", ("update", "reset"))
 
 PIPELINE = Schema({
     "detector": F(DETECTOR, doc="the detector on every laser (laser_segments: seed 000's segments and geometry)"),
@@ -463,6 +488,8 @@ PIPELINE = Schema({
                          doc="the old spelling of fusion.distance, moved there when the file is loaded"),
     "tracker": F(TRACKER, doc="the tracker (nnt: seed 000's nearest-neighbour Kalman tracker; mht: its "
                                   "multi-hypothesis baseline)"),
+    "groups": F(GROUP_STAGE, doc="social relations, groups and their tracking (coherent_motion: seed 000's SPENCER "
+                                 "group stage)"),
     "map_filter": F(MAP_FILTER, optional=True,
                     doc="drop every detector's detections on the map's walls and obstacles before fusion (seed 000 "
                         "Sec. V-C); left out or null: none"),

@@ -12,15 +12,16 @@ from conftest import LASERS, room
 
 from crowdsim.loop import Simulation
 from crowdsim.run import _without_unset, run
-from pipeline.assemble import DETECTORS, FUSIONS, TRACKERS, Detector, Fusion, Tracker, build_pipeline
+from pipeline.assemble import (DETECTORS, FUSIONS, GROUP_STAGES, TRACKERS, Detector, Fusion, GroupStage, Tracker,
+                               build_pipeline)
 from pipeline.detectors.laser_segments import SegmentDetector
 from pipeline.fusion import NearestFusion
 from pipeline.frames import compose, inverse, transform_points
 from pipeline.tracking.nnt import NearestNeighbourTracker, TrackerParams
 from pipeline.types import DetectedPersons, TrackedPersons
 from scenarios import ScenarioError, load_scenario, scenario_from_dict
-from scenarios.format import (DETECTOR, DETECTOR_READS, DETECTOR_TYPES, FUSION, FUSION_TYPES, NNT, TRACKER,
-                              TRACKER_TYPES)
+from scenarios.format import (COHERENT_MOTION, DETECTOR, DETECTOR_READS, DETECTOR_TYPES, FUSION, FUSION_TYPES,
+                              GROUP_STAGE, GROUP_STAGE_TYPES, NNT, TRACKER, TRACKER_TYPES)
 from scenarios.schema import Field, Schema
 
 
@@ -92,13 +93,14 @@ def load(tmp_path, data) -> dict:
 def test_the_format_and_assemble_name_the_same_types_with_the_same_defaults():
     assert set(DETECTOR_TYPES) == set(DETECTORS) == set(DETECTOR_READS)
     assert set(FUSION_TYPES) == set(FUSIONS) and set(TRACKER_TYPES) == set(TRACKERS)
-    for types, classes in ((DETECTOR_TYPES, DETECTORS), (FUSION_TYPES, FUSIONS)):
+    assert set(GROUP_STAGE_TYPES) == set(GROUP_STAGES)
+    for types, classes in ((DETECTOR_TYPES, DETECTORS), (FUSION_TYPES, FUSIONS), (GROUP_STAGE_TYPES, GROUP_STAGES)):
         for name, schema in types.items():
             signature = inspect.signature(classes[name]).parameters
             assert {k: f.default for k, f in schema.fields.items()} == {k: p.default for k, p in signature.items()}
     assert {k: f.default for k, f in NNT.fields.items()} == asdict(TrackerParams())
     # the methods the format asks of a class of one's own are the interfaces'
-    for typed, protocol in ((DETECTOR, Detector), (FUSION, Fusion), (TRACKER, Tracker)):
+    for typed, protocol in ((DETECTOR, Detector), (FUSION, Fusion), (TRACKER, Tracker), (GROUP_STAGE, GroupStage)):
         assert set(typed.methods) == {m for m in vars(protocol) if not m.startswith("_")}
 
 
@@ -113,6 +115,7 @@ def test_old_keys_give_todays_parts_and_the_resolved_section_reloads_equal(tmp_p
         "detectors": {},
         "fusion": {"type": "nearest", "distance": 0.3},
         "map_filter": None,
+        "groups": {"type": "coherent_motion", **{k: f.default for k, f in COHERENT_MOTION.fields.items()}},
         "tracker": {"type": "nnt", **asdict(TrackerParams(n_delete=25))}}  # the NNT's defaults: test above
     parts = build_pipeline(sc["pipeline"], ["front_laser", "rear_laser"])
     front, rear = parts.detectors["front_laser"], parts.detectors["rear_laser"]

@@ -163,7 +163,7 @@ def test_short_run_writes_a_complete_run_directory(tmp_path, capsys):
     captured = capsys.readouterr()
     assert listing(tmp_path) == {"tiny.yaml", "out"}  # the temporary directory was moved, not left behind
     assert {"metrics.json", "groundtruth.csv", "tracks.csv", "detections.csv", "robot.csv", "scenario.yaml",
-            "summary.md", "topdown.png", "visibility.csv"} <= listing(out)
+            "summary.md", "topdown.png", "visibility.csv", "relations.csv", "groups.csv"} <= listing(out)
     # the resolved scenario is a scenario file that loads to the same scenario
     again, first = load_scenario(str(out / "scenario.yaml")), load_scenario(str(scenario))
     assert again.pop("source") != first.pop("source") and again == first
@@ -192,12 +192,17 @@ def test_short_run_writes_a_complete_run_directory(tmp_path, capsys):
         lines = (out / name).read_text().splitlines()
         assert lines[0] == header
         assert all(len(row.split(",")) == header.count(",") + 1 for row in lines[1:])
-    assert GT_HEADER == ("frame,t,id,x,y,vx,vy,range,in_range,beams,visible,visible_seed000")
+    assert GT_HEADER == ("frame,t,id,x,y,vx,vy,range,in_range,beams,visible,visible_seed000,group")
     assert CSV_HEADER == "frame,t,id,x,y,vx,vy"
     gt_rows = [[float(v) for v in r.split(",")] for r in (out / "groundtruth.csv").read_text().splitlines()[1:]]
     # visible is 1 exactly where at least one beam hit the person; in_range where within the 20 m range
     assert all((r[9] > 0) == (r[10] == 1) and (r[7] <= 20.0) == (r[8] == 1) for r in gt_rows)
     assert len({r[0] for r in gt_rows}) == metrics["frames"]
+    # the two standing persons are a static group; the walkers from the source walk alone (no group sizes given)
+    # (odom: 5.5 m ahead of the robot's start, which faces +y from (6, 2))
+    grouped = {(r[2], r[12]) for r in gt_rows if r[12] >= 0}
+    assert len(grouped) == 2 and len({g for _, g in grouped}) == 1
+    assert all(abs(r[3] - 5.5) < 1.0 and abs(r[4]) < 1.0 for r in gt_rows if r[12] >= 0)
     # the rows that count: in range and visible
     assert sum(r[8] == 1 and r[10] == 1 for r in gt_rows) == metrics["tracking"]["gt"]
     stamps = [r[1] for r in gt_rows]

@@ -234,8 +234,96 @@ def test_what_does_not_move_is_one_layer_apart_from_what_does(tmp_path):
     kw = dict(tracks=tr, groundtruth=tr, detections=det, robot=np.array([[0.0, 0.0, 0.0]]), walls=np.zeros((1, 2, 2)))
     root = draw(tmp_path, **kw)
     top = [e.get("id") for e in root][1:]  # after the background
-    assert top == ["map", "detections", "detection-labels", "markers", "clock", "scale", "title"]
+    assert top == ["map", "groups", "detections", "detection-labels", "markers", "clock", "scale", "title"]
     # Chrome paints a will-change layer once instead of at every step of every marker
     assert layer(root, "map").get("style") == "will-change:transform"
     assert [e.get("id") for e in layer(root, "map")] == ["walls", "robot", "groundtruth", "tracks"]
     assert layer(draw(tmp_path, animate=False, **kw), "map").get("style") is None
+
+
+def two_walking_together():
+    """Tracks 1 and 2 side by side 1 m apart, frames 0 and 1 at t = 0 and 0.5 s, a third (9) alone far off; group 5
+    of 1 and 2 in both frames, its centroid between them; rows as groups.csv holds them (frame, t, group, id, x, y,
+    age)."""
+    tr = np.concatenate([track(1, [0.0, 0.5], [1.0, 1.5], [1.0, 1.0]), track(2, [0.0, 0.5], [1.0, 1.5], [2.0, 2.0]),
+                         track(9, [0.0, 0.5], [6.0, 6.0], [0.0, 0.0])])
+    groups = np.array([[0, 0.0, 5, 1, 1.0, 1.5, 0.0], [0, 0.0, 5, 2, 1.0, 1.5, 0.0],
+                       [1, 0.5, 5, 1, 1.5, 1.5, 0.5], [1, 0.5, 5, 2, 1.5, 1.5, 0.5]])
+    return tr, groups
+
+
+def test_group_members_are_joined_to_the_centroid_with_the_group_id_there_frame_by_frame(tmp_path):
+    tr, groups = two_walking_together()
+    root = draw(tmp_path, tracks=tr, groups=groups, start=0.0)
+    frames = [g for g in layer(root, "groups") if g.tag == NS + "g"]
+    assert [g.get("display") for g in frames] == ["none", "none"]
+    # frame 0: members (1, 1) and (1, 2) m -> (100, -100) and (100, -200); centroid (1, 1.5) -> (100, -150);
+    # frame 1: all 0.5 m further along x
+    for g, x in zip(frames, (100.0, 150.0)):
+        (path,) = g.iter(NS + "path")
+        lines = subpaths(path.get("d"))
+        np.testing.assert_allclose(lines, [[[x, -100], [x, -150]], [[x, -200], [x, -150]]])
+        (label,) = g.iter(NS + "text")
+        assert (texts(g), float(label.get("x")), float(label.get("y"))) == (["G5"], x, -150.0)
+        assert path.get("stroke") == label.get("fill") == "hsl(328,75%,40%)"  # group 5's colour: 5 * 137.508 % 360
+    # each frame from its time until the next; the last one stays on at the end
+    assert [[(s.get("begin"), s.get("dur"), s.get("fill")) for s in sets(g)] for g in frames] == [
+        [("0.000s", "0.500s", None)], [("0.500s", None, "freeze")]]
+
+
+def test_group_layer_is_above_the_tracks_and_below_the_detection_labels(tmp_path):
+    tr, groups = two_walking_together()
+    det = np.array([[0, 0.0, 0, 1.0, 1.0]])
+    root = draw(tmp_path, tracks=tr, groups=groups, detections=det)
+    top = [e.get("id") for e in root]
+    assert top.index("map") < top.index("groups") < top.index("detection-labels")
+
+
+def test_static_view_draws_the_groups_of_the_last_frame_only(tmp_path):
+    tr, groups = two_walking_together()
+    root = draw(tmp_path, tracks=tr, groups=groups, animate=False)
+    (frame,) = [g for g in layer(root, "groups") if g.tag == NS + "g"]
+    assert frame.get("display") is None and not sets(frame)
+    # frame 1 (t = 0.5 s): members at (1.5, 1) and (1.5, 2) m, centroid (1.5, 1.5) m
+    np.testing.assert_allclose(subpaths(frame.find(NS + "path").get("d")),
+                               [[[150, -100], [150, -150]], [[150, -200], [150, -150]]])
+    label = frame.find(NS + "text")
+    assert (texts(frame), label.get("x"), label.get("y")) == (["G5"], "150.0", "-150.0")
+
+
+def test_group_members_are_found_by_frame_and_id_and_those_without_a_track_row_left_out(tmp_path):
+    # track 1 in frames 0 and 1; track 2 only in frame 0; group 3 lists both in frame 1 (rows without the age
+    # column). Members are matched by frame and track id, whatever the rows' order
+    tr = np.concatenate([track(1, [0.0, 0.5], [0.0, 1.0], [0.0, 0.0]), track(2, [0.0], [5.0], [5.0])])[[2, 1, 0]]
+    groups = np.array([[1, 0.5, 3, 2, 2.0, 2.0], [1, 0.5, 3, 1, 2.0, 2.0]])
+    frame = layer(draw(tmp_path, tracks=tr, groups=groups, animate=False), "groups").find(NS + "g")
+    # only track 1's row of frame 1, (1, 0) m -> (100, 0), joined to the centroid (2, 2) m -> (200, -200)
+    np.testing.assert_allclose(subpaths(frame.find(NS + "path").get("d")), [[[100, 0], [200, -200]]])
+    assert texts(frame) == ["G3"]
+
+
+def test_groups_layer_shows_a_cycle_at_most_every_0_2_s_back_from_the_last(tmp_path):
+    ts = np.arange(26) * 0.04  # 25 Hz from 0 to 1 s
+    tr = np.concatenate([track(1, ts, ts, np.zeros(26)), track(2, ts, ts, np.ones(26))])
+    groups = np.concatenate([np.column_stack([np.arange(26), ts, np.full(26, 4), np.full(26, i), ts, np.full(26, 0.5)])
+                             for i in (1, 2)])
+    root = draw(tmp_path, tracks=tr, groups=groups, start=0.0)
+    frames = [g for g in layer(root, "groups") if g.tag == NS + "g"]
+    # the cycles at 1.0, 0.8, ..., 0.0 s: six of the 26, each until the next, the last for good
+    assert [[(s.get("begin"), s.get("dur")) for s in sets(g)] for g in frames] == [
+        [(f"{b:.3f}s", "0.200s")] for b in (0.0, 0.2, 0.4, 0.6, 0.8)] + [[("1.000s", None)]]
+    # the 0.4 s cycle's centroid is at x = 0.4 m
+    assert frames[2].find(NS + "text").get("x") == "40.0"
+
+
+def test_groups_outside_the_window_are_left_out(tmp_path):
+    tr, groups = two_walking_together()
+    root = draw(tmp_path, tracks=tr, groups=groups, end=0.25)
+    (frame,) = [g for g in layer(root, "groups") if g.tag == NS + "g"]
+    assert frame.find(NS + "text").get("x") == "100.0"  # frame 0's centroid; frame 1 at 0.5 s is after the end
+    assert [(s.get("begin"), s.get("dur")) for s in sets(frame)] == [("0.000s", None)]
+
+
+def test_bad_groups_are_refused(tmp_path):
+    with pytest.raises(ValueError, match="groups"):
+        write_svg(tmp_path / "x.svg", tracks=None, groups=np.zeros((2, 5)))

@@ -67,6 +67,50 @@ def bench_tracker(spec: dict, n_tracks: int, clutter: bool, quick: bool) -> floa
     return bench_cycles(n_tracks, spec, *(CLUTTER if clutter else (0.0, 0)), cycles, blocks, warm).cycles_per_s
 
 
+def group_scene(n_tracks: int, seed: int = 0):
+    """Tracks for the group stage: ``n_tracks`` in a square at 0.55 persons/m^2 (a dense hall, about 15 others
+    within the 3 m gate of each), half standing (heading 0 for all: every standing pair passes the heading gate),
+    half walking at 1.2 m/s in pairs and alone in four directions; each call moves them one 0.08 s cycle, with 5 cm of
+    noise, as a tracker's output."""
+    from pipeline.types import TrackedPersons
+
+    rng = np.random.default_rng(seed)
+    side = np.sqrt(n_tracks / 0.55)
+    xy = rng.uniform(0, side, (n_tracks, 2))
+    heading = rng.integers(0, 4, n_tracks) * np.pi / 2
+    v = np.where(np.arange(n_tracks)[:, None] % 2 == 0, 0.0, 1.2 * np.column_stack([np.cos(heading),
+                                                                                     np.sin(heading)]))
+    ids = np.arange(1, n_tracks + 1)
+    z = np.zeros((n_tracks, 2, 2))
+
+    def cycle(k: int) -> TrackedPersons:
+        pos = np.remainder(xy + v * 0.08 * k, side) + rng.normal(0, 0.05, xy.shape)
+        return TrackedPersons(0.08 * k, "odom", ids, np.ones(n_tracks, bool), np.zeros(n_tracks, bool),
+                              -np.ones(n_tracks, np.int64), pos, v + rng.normal(0, 0.05, v.shape), z, z,
+                              np.zeros(n_tracks))
+
+    return cycle
+
+
+def bench_groups(n_tracks: int, quick: bool, **stage) -> float:
+    """Cycles/s of the group stage (relations, detection, composition tracking) on ``group_scene``."""
+    from pipeline.groups import CoherentMotionGroups
+
+    groups, cycle = CoherentMotionGroups(**stage), group_scene(n_tracks)
+    scenes = [cycle(k) for k in range(200)]  # made beforehand: the stage alone is timed
+    counter = iter(range(10 ** 9))
+
+    def one() -> None:
+        k = next(counter)
+        groups.update(0.08 * k, scenes[k % len(scenes)])
+
+    return rate(one, 20 if quick else 200)
+
+
+GROUP_STAGES = (("svm, single linkage (the default)", {}), ("spencer, single linkage", {"model": "spencer"}),
+                ("svm, complete linkage", {"linkage": "complete"}), ("forest, single linkage", {"model": "forest"}))
+
+
 def bench_loop(quick: bool) -> dict:
     from crowdsim.loop import Simulation
 
@@ -100,6 +144,11 @@ def run_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
                 show(f"tracker_{key}_cycles_per_s_{n}{'_clutter' if clutter else ''}",
                      bench_tracker(spec, n, clutter, quick), "cycles/s",
                      f"{label}, {n} tracks{', clutter' if clutter else ''}")
+    for label, stage in GROUP_STAGES:
+        for n in (30, 80):
+            key = "groups_" + "_".join(f"{v}" for v in stage.values()) if stage else "groups_default"
+            show(f"{key}_ms_per_cycle_{n}", 1e3 / bench_groups(n, quick, **stage), "ms/cycle",
+                 f"group stage, {label}, {n} tracks")
     loop = bench_loop(quick)
     show("loop_realtime_factor", loop["realtime_factor"], "x real time",
          f"airport loop, 2 lasers @25 Hz + tracker + CLEAR-MOT ({loop['mean_persons_in_range']:.0f} in range)")

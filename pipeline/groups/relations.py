@@ -1,0 +1,179 @@
+"""Social relations between tracked persons from their coherent motion: SPENCER's relation stage (seed 000: D2.5 Sec.
+3 and the ROS book chapter, Linder & Arras 2016, Sec. 5.1; indicators after Moussaid et al. 2010).
+
+For every pair of tracks, three indicators: their distance, the difference of their speeds, and the difference of
+their headings, each heading taken from the track's velocity and set to 0 below ``min_speed`` (0.1 m/s), as
+SPENCER's ``spatial_relations.cpp`` does (a slow track's heading is 0 rad, not "none", so a slow track against a
+mover differs by the mover's own heading). Pairs past any gate (farther than 3 m, speeds more than 1 m/s apart, or
+headings more than pi/4 apart; strict) get strength 0.1 without the classifier; the others get the classifier's
+probability that the two walk together.
+
+Classifiers (``RelationModel``): ``spencer``, the released default of SPENCER, a linear nu-SVC on the raw indicators
+with libsvm's Platt sigmoid; ``svm``, ours, a linear SVM on the cubic monomials of the standardised indicators (the
+function class of a cubic polynomial kernel) with a Platt sigmoid fitted on held-out seeds; ``forest``, ours, a
+random forest whose leaves hold the share of related pairs. Ours are trained on pairs of tracker output labelled by
+the true groups of the persons the tracks matched (``crowdsim experiment train-relations``), so they learn the
+tracker's noise; they ship in ``models/`` as plain arrays.
+
+``LongTermRelations`` is SPENCER's optional temporal smoothing (``long_term_relations.py``).
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from pipeline.detectors.learned_segments import Forest
+
+MODELS_DIR = Path(__file__).parent / "models"
+MODEL_FILES = {"svm": "relations_svm.npz", "forest": "relations_forest.npz"}
+MODEL_FORMAT = "crowdsim-relations/1"
+GATED_STRENGTH = 0.1  # spatial_relations.cpp: a gated pair is related with probability 0.1
+INDICATORS = ("distance", "speed_difference", "heading_difference")
+
+
+def indicators(position: np.ndarray, velocity: np.ndarray, min_speed: float = 0.1):
+    """(i, j, x) for every pair i < j of ``n`` tracks: x [pairs, 3] holds the distance (m), the speed difference
+    (m/s) and the heading difference (rad, in [0, pi]; a track slower than ``min_speed`` heads at 0 rad)."""
+    i, j = np.triu_indices(len(position), 1)
+    speed = np.hypot(velocity[:, 0], velocity[:, 1])
+    heading = np.where(speed >= min_speed, np.arctan2(velocity[:, 1], velocity[:, 0]), 0.0)
+    turn = np.abs(np.remainder(heading[i] - heading[j] + np.pi, 2 * np.pi) - np.pi)
+    distance = np.hypot(position[i, 0] - position[j, 0], position[i, 1] - position[j, 1])
+    return i, j, np.column_stack([distance, np.abs(speed[i] - speed[j]), turn])
+
+
+def monomials(z: np.ndarray, powers: np.ndarray) -> np.ndarray:
+    """The products prod_k z[:, k] ** powers[m, k] for each row of ``powers`` [m, d]."""
+    return np.prod(z[:, None, :] ** powers[None], axis=2)
+
+
+def monomial_powers(dim: int, degree: int) -> np.ndarray:
+    """Every exponent vector of ``dim`` variables of total degree 1..``degree`` (the constant is the intercept)."""
+    rows = [p for p in itertools.product(range(degree + 1), repeat=dim) if 0 < sum(p) <= degree]
+    return np.array(sorted(rows, key=lambda p: (sum(p), [-v for v in p])), np.int64)
+
+
+@dataclass(frozen=True)
+class PlattSvm:
+    """A linear SVM on monomials of the standardised indicators: f = monomials((x - mean) / scale) . weight +
+    intercept, and P(related) = 1 / (1 + exp(platt_a f + platt_b)) (Platt 1999, as libsvm's
+    ``sigmoid_predict``), clamped to [1e-7, 1 - 1e-7] as libsvm's ``svm_predict_probability`` does."""
+
+    mean: np.ndarray
+    scale: np.ndarray
+    powers: np.ndarray
+    weight: np.ndarray
+    intercept: float
+    platt_a: float
+    platt_b: float
+
+    def decision(self, x: np.ndarray) -> np.ndarray:
+        return monomials((x - self.mean) / self.scale, self.powers) @ self.weight + self.intercept
+
+    def predict_proba(self, x: np.ndarray) -> np.ndarray:
+        p = 0.5 * (1.0 - np.tanh(0.5 * (self.platt_a * self.decision(x) + self.platt_b)))  # logistic, no overflow
+        return np.clip(p, 1e-7, 1 - 1e-7)
+
+
+# SPENCER's released default (tracking/groups/spencer_social_relations/models/groups_probabilistic_small.model, the
+# `svm_filename` default of spatial_relations.cpp): a linear nu-SVC on the raw indicators, no scaling. rho, probA and
+# probB as the file prints them; the weights computed from its 2,501 support vectors (sum of coefficient x vector).
+SPENCER = PlattSvm(mean=np.zeros(3), scale=np.ones(3), powers=np.eye(3, dtype=np.int64),
+                   weight=np.array([-1.875462017868918, -0.5596792850946883, -0.9133788466043510]),
+                   intercept=3.03765, platt_a=-1.55322, platt_b=-0.0123641)
+
+
+def save_model(path: Path, classifier: PlattSvm | Forest, info: dict) -> None:
+    """A trained classifier as an .npz of plain arrays and a JSON header (no pickle)."""
+    kind = "svm" if isinstance(classifier, PlattSvm) else "forest"
+    arrays = {name: np.asarray(getattr(classifier, name)) for name in classifier.__dataclass_fields__}
+    header = {"format": MODEL_FORMAT, "kind": kind, "indicators": list(INDICATORS), "info": info}
+    np.savez(path, header=np.array(json.dumps(header)), **arrays)
+
+
+def load_model(model: str | Path) -> PlattSvm | Forest:
+    """``spencer``, a shipped model by name (``svm``, ``forest``), or the path of one ``save_model`` wrote."""
+    if model == "spencer":
+        return SPENCER
+    path = MODELS_DIR / MODEL_FILES[model] if model in MODEL_FILES else Path(model)
+    try:
+        with np.load(path) as data:
+            header = json.loads(str(data["header"]))
+            arrays = {name: data[name] for name in data.files if name != "header"}
+    except (OSError, ValueError, KeyError) as e:
+        raise ValueError(f"{path}: not a relation model ({e}); expected spencer, "
+                         f"{', '.join(MODEL_FILES)} or an .npz written by `crowdsim experiment train-relations`") from None
+    if header.get("format") != MODEL_FORMAT:
+        raise ValueError(f"{path}: format {header.get('format')!r}; expected {MODEL_FORMAT}")
+    if header["kind"] == "svm":
+        return PlattSvm(**{k: (float(v) if v.ndim == 0 else v) for k, v in arrays.items()})
+    return Forest(**arrays)
+
+
+def model_info(model: str | Path) -> dict:
+    """What a shipped or saved model's header says of how it was made ({} for spencer)."""
+    if model == "spencer":
+        return {}
+    path = MODELS_DIR / MODEL_FILES[model] if model in MODEL_FILES else Path(model)
+    with np.load(path) as data:
+        return json.loads(str(data["header"]))["info"]
+
+
+class RelationEstimator:
+    """Every pair of tracks and its strength: the gates, then the classifier on the pairs they pass."""
+
+    def __init__(self, model: str = "svm", max_distance: float = 3.0, max_speed_difference: float = 1.0,
+                 max_heading_difference: float = np.pi / 4, min_speed: float = 0.1):
+        self.classifier = load_model(model)
+        self.limits = np.array([max_distance, max_speed_difference, max_heading_difference])
+        self.min_speed = min_speed
+
+    def strengths(self, position: np.ndarray, velocity: np.ndarray):
+        """(i, j, strength) of every pair i < j of tracks by row."""
+        i, j, x = indicators(position, velocity, self.min_speed)
+        strength = np.full(len(i), GATED_STRENGTH)
+        inside = (x <= self.limits).all(axis=1)
+        if inside.any():
+            strength[inside] = self.classifier.predict_proba(x[inside])
+        return i, j, strength
+
+
+class LongTermRelations:
+    """SPENCER's long-term relations (``long_term_relations.py``): each pair's strength moves towards the current
+    one at most ``growth`` per second up and ``decay`` per second down, ``fast_decay`` when the two are farther than
+    ``max_distance``; a new pair starts at 0, and a pair goes when either track does. The defaults are the rates its
+    callback uses (0.5 in 3.5 s, 40 s, 5 s; its launch file's values never reach the callback)."""
+
+    def __init__(self, growth: float = 0.5 / 3.5, decay: float = 0.5 / 40, fast_decay: float = 0.5 / 5,
+                 max_distance: float = 4.0):
+        self.growth, self.decay, self.fast_decay, self.max_distance = growth, decay, fast_decay, max_distance
+        self.reset()
+
+    def reset(self) -> None:
+        self.keys = np.zeros(0, np.int64)  # a * 2**32 + b of each remembered pair (a < b track ids), sorted
+        self.values = np.zeros(0)
+        self.stamp: float | None = None
+
+    def smooth(self, stamp: float, a: np.ndarray, b: np.ndarray, strength: np.ndarray,
+               distance: np.ndarray) -> np.ndarray:
+        """The smoothed strengths of pairs (a, b) of track ids at ``stamp``; pairs not given are forgotten."""
+        dt = 0.0 if self.stamp is None else stamp - self.stamp
+        self.stamp = stamp
+        key = np.minimum(a, b) * (1 << 32) + np.maximum(a, b)
+        rows = np.searchsorted(self.keys, key)
+        known = rows < len(self.keys)
+        known[known] = self.keys[rows[known]] == key[known]
+        held = np.where(known, self.values[np.minimum(rows, max(len(self.keys) - 1, 0))] if len(self.keys) else 0.0,
+                        0.0)
+        far = distance > self.max_distance
+        target = np.where(far, 0.0, strength)
+        down = np.where(far, self.fast_decay, self.decay) * dt
+        out = np.where(target >= held, np.minimum(held + self.growth * dt, target), np.maximum(held - down, target))
+        order = np.argsort(key)
+        self.keys, self.values = key[order], out[order]
+        return out

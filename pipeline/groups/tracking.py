@@ -1,0 +1,94 @@
+"""Group tracking by composition (SPENCER's ``tracked_groups.py``; seed 000 D2.5 Sec. 3: "more robust when group
+splits and merges happen frequently" than tracking centroids).
+
+A memory holds the last ``memory`` member sets seen (300, as SPENCER's), each with its group id and since when that
+exact set has existed. Each cycle, clusters in the order of their smallest track id take the id of the remembered
+set that is a subset or a superset of theirs, the largest such, the oldest among equals, unless another cluster took
+that id this cycle; else a new id. A group's age is how long its exact member set has existed: it restarts at any
+change of members, as SPENCER's. Our one departure: only clusters of two or more take part. SPENCER lets single
+persons take ids and enter the memory too, so a new pair could take the id one of its members had alone, and a
+person's solitude would fill the memory.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+
+import numpy as np
+
+from pipeline.types import TrackedGroups
+
+
+class CompositionTracker:
+    def __init__(self, memory: int = 300):
+        self.memory_size = memory
+        self.reset()
+
+    def reset(self) -> None:
+        self.memory: OrderedDict[int, tuple[frozenset, int, float]] = OrderedDict()  # entry -> (members, id, since)
+        self.by_track: dict[int, set[int]] = {}  # track id -> the entries that hold it
+        self.by_members: dict[frozenset, int] = {}  # member set -> its entry
+        self.next_entry = 0
+        self.next_id = 0
+
+    def update(self, stamp: float, frame: str, track_id: np.ndarray, position: np.ndarray,
+               labels: np.ndarray) -> TrackedGroups:
+        """The groups of this cycle's clusters (``labels``, one per track) of two or more tracks."""
+        sizes = np.bincount(labels) if len(labels) else np.zeros(0, np.int64)
+        order = np.argsort(labels, kind="stable")
+        starts = np.concatenate([[0], np.cumsum(sizes)])
+        clusters = [order[starts[c]:starts[c + 1]] for c in np.flatnonzero(sizes >= 2)]
+        clusters.sort(key=lambda rows: track_id[rows].min())
+        used, ids, ages = set(), [], []
+        for rows in clusters:
+            members = frozenset(track_id[rows].tolist())
+            group_id = self._match(members, used)
+            if group_id is None:
+                group_id = self.next_id
+            self.next_id = max(self.next_id, group_id + 1)
+            used.add(group_id)
+            since = self._remember(members, group_id, stamp)
+            ids.append(group_id)
+            ages.append(max(0.0, stamp - since))
+        member_rows = np.concatenate(clusters) if clusters else np.zeros(0, np.int64)
+        member_group = np.repeat(np.array(ids, np.int64), [len(rows) for rows in clusters])
+        centroid = np.array([position[rows].mean(axis=0) for rows in clusters]).reshape(-1, 2)
+        return TrackedGroups(stamp, frame, np.array(ids, np.int64), centroid, member_group,
+                             track_id[member_rows].astype(np.int64), np.array(ages, float))
+
+    def _match(self, members: frozenset, used: set[int]) -> int | None:
+        """The id of the largest (then oldest) remembered subset or superset of ``members`` not used this cycle."""
+        best = None
+        for entry in set().union(*(self.by_track.get(t, ()) for t in members)):
+            held, group_id, since = self.memory[entry]
+            if group_id in used or not (held <= members or held >= members):
+                continue
+            if best is None or (len(held), -since, -entry) > (len(best[0]), -best[2], -best[3]):
+                best = (held, group_id, since, entry)
+        return None if best is None else best[1]
+
+    def _remember(self, members: frozenset, group_id: int, stamp: float) -> float:
+        """Store ``members`` as the newest entry; since when this exact set has existed."""
+        since = stamp
+        old = self.by_members.get(members)
+        if old is not None:
+            since = min(since, self.memory[old][2])
+            self._forget(old)
+        entry = self.next_entry
+        self.next_entry += 1
+        self.memory[entry] = (members, group_id, since)
+        self.by_members[members] = entry
+        for t in members:
+            self.by_track.setdefault(t, set()).add(entry)
+        while len(self.memory) > self.memory_size:
+            self._forget(next(iter(self.memory)))
+        return since
+
+    def _forget(self, entry: int) -> None:
+        members, _, _ = self.memory.pop(entry)
+        del self.by_members[members]
+        for t in members:
+            held = self.by_track[t]
+            held.discard(entry)
+            if not held:
+                del self.by_track[t]

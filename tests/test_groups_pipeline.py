@@ -1,0 +1,155 @@
+"""The group stage by hand: the coherent-motion indicators and SPENCER's gates, its released model's strengths, group
+detection with and without chaining, and composition tracking through a split, a merge and a member swap."""
+
+import numpy as np
+import pytest
+
+from pipeline.groups import CoherentMotionGroups
+from pipeline.groups.detection import detect_groups
+from pipeline.groups.relations import (GATED_STRENGTH, SPENCER, LongTermRelations, RelationEstimator, indicators,
+                                       monomial_powers)
+from pipeline.groups.tracking import CompositionTracker
+from pipeline.types import TrackedPersons
+
+
+def tracks(ids, position, velocity, stamp=0.0) -> TrackedPersons:
+    n = len(ids)
+    return TrackedPersons(stamp, "odom", np.asarray(ids, np.int64), np.ones(n, bool), np.zeros(n, bool),
+                          np.full(n, -1, np.int64), np.asarray(position, float).reshape(-1, 2),
+                          np.asarray(velocity, float).reshape(-1, 2), np.zeros((n, 2, 2)), np.zeros((n, 2, 2)),
+                          np.zeros(n))
+
+
+def test_indicators_by_hand():
+    pos = [[0, 0], [3, 4], [1, 0], [0, 2]]
+    # east at 1 m/s; heading 170 deg at 0.5; north at 1; 0.05 m/s north: slower than 0.1, heading taken as 0
+    vel = [[1, 0], [0.5 * np.cos(np.radians(170)), 0.5 * np.sin(np.radians(170))], [0, 1], [0, 0.05]]
+    i, j, x = indicators(np.array(pos, float), np.array(vel, float))
+    got = {(a, b): row for a, b, row in zip(i, j, x)}
+    assert got[(0, 1)] == pytest.approx([5.0, 0.5, np.radians(170)])
+    assert got[(0, 2)] == pytest.approx([1.0, 0.0, np.pi / 2])
+    assert got[(0, 3)] == pytest.approx([2.0, 0.95, 0.0])  # the slow track "heads" east, as the mover
+    assert got[(1, 3)] == pytest.approx([np.hypot(3, 2), 0.45, np.radians(170)])
+    assert got[(2, 3)] == pytest.approx([np.hypot(1, 2), 0.95, np.pi / 2])
+    # headings 170 and -170 deg are 20 deg apart, across the wrap
+    _, _, x = indicators(np.zeros((2, 2)), np.array([[np.cos(np.radians(a)), np.sin(np.radians(a))] for a in (170, -170)]))
+    assert x[0, 2] == pytest.approx(np.radians(20))
+
+
+def test_spencer_released_model_and_its_gates():
+    # f = 3.03765 - 1.875462 d - 0.559679 dv - 0.913379 dtheta; P = 1 / (1 + exp(-1.55322 f - 0.0123641))
+    for x, p in (((0, 0, 0), 0.99126), ((1, 0, 0), 0.86027), ((1.5, 0.2, 0.2), 0.47587), ((2, 0.5, 0.5), 0.096259)):
+        f = 3.03765 - 1.875462017868918 * x[0] - 0.5596792850946883 * x[1] - 0.913378846604351 * x[2]
+        assert SPENCER.predict_proba(np.array([x], float))[0] == pytest.approx(1 / (1 + np.exp(-1.55322 * f - 0.0123641)))
+        assert SPENCER.predict_proba(np.array([x], float))[0] == pytest.approx(p, abs=5e-5)
+    est = RelationEstimator("spencer")
+    # gates are strict: 3 m apart is classified, 3.01 m gated; speeds 1.01 m/s apart gated; headings past pi/4 gated
+    pos = np.array([[0, 0], [3.0, 0], [0, 3.01], [-1, 0]], float)
+    vel = np.array([[1, 0], [1, 0], [1, 0], [1.0 * np.cos(0.8), 1.0 * np.sin(0.8)]])
+    i, j, s = est.strengths(pos, vel)
+    got = dict(zip(zip(i, j), s))
+    assert got[(0, 1)] == pytest.approx(SPENCER.predict_proba(np.array([[3.0, 0, 0]]))[0])
+    assert got[(0, 2)] == GATED_STRENGTH and got[(0, 3)] == GATED_STRENGTH  # 3.01 m; 0.8 rad > pi/4
+    i, j, s = est.strengths(np.array([[0, 0], [1, 0]], float), np.array([[0.2, 0], [1.21, 0]]))
+    assert s[0] == GATED_STRENGTH  # 1.01 m/s apart
+
+
+def test_monomials_of_degree_three_are_the_19_products():
+    powers = monomial_powers(3, 3)
+    assert len(powers) == 19 and set(powers.sum(axis=1)) == {1, 2, 3}
+    assert len({tuple(p) for p in powers}) == 19
+
+
+def queue_relations(n=5, spacing=0.8):
+    """Standing strangers in a line ``spacing`` apart, strengths from SPENCER's model (speeds and headings 0)."""
+    pos = np.column_stack([spacing * np.arange(n), np.zeros(n)])
+    return RelationEstimator("spencer").strengths(pos, np.zeros((n, 2)))
+
+
+def test_single_linkage_chains_a_queue_and_complete_linkage_does_not():
+    i, j, s = queue_relations()
+    # f = 3.03765 - 1.875462 d: neighbours 0.8 m apart 1/(1 + exp(-1.55322 x 1.53728 - 0.01236)) = 0.9168; two apart
+    # (1.6 m) 0.5174; three (2.4 m) 0.0944; four (3.2 m) gated
+    assert s[(i == 0) & (j == 1)][0] == pytest.approx(0.9168, abs=1e-4)
+    assert s[(i == 0) & (j == 2)][0] == pytest.approx(0.5174, abs=1e-4)
+    assert s[(i == 0) & (j == 4)][0] == GATED_STRENGTH
+    labels = detect_groups(5, i, j, s, 0.5, "single")
+    assert len(set(labels)) == 1  # SPENCER: the whole queue is one group
+    labels = detect_groups(5, i, j, s, 0.5, "complete")
+    # complete linkage: a group needs every pair at 0.5 or more; triples of neighbours (0-1-2) pass, no more
+    assert max(np.bincount(labels)) <= 3 and len(set(labels)) >= 2
+    # a clique of three stays one group under every linkage
+    pos = np.array([[0, 0], [0.8, 0], [0.4, 0.6]])
+    i, j, s = RelationEstimator("spencer").strengths(pos, np.tile([1.0, 0.0], (3, 1)))
+    for method in ("single", "complete", "average"):
+        assert len(set(detect_groups(3, i, j, s, 0.5, method))) == 1
+
+
+def test_average_linkage_by_hand():
+    # 0-1 and 2-3 strongly related (0.9), 1-2 at 0.6, the rest missing (strength 0): single links all four,
+    # average merges {0,1} and {2,3} only if their mean distance 1 - (0.6 + 0 + 0 + 0) / 4 = 0.85 <= 0.5: no
+    i, j, s = np.array([0, 2, 1]), np.array([1, 3, 2]), np.array([0.9, 0.9, 0.6])
+    assert len(set(detect_groups(4, i, j, s, 0.5, "single"))) == 1
+    labels = detect_groups(4, i, j, s, 0.5, "average")
+    assert labels[0] == labels[1] and labels[2] == labels[3] and labels[0] != labels[2]
+
+
+def groups_of(result):
+    return {g: set(result.member_track[result.member_group == g].tolist()) for g in result.group_id.tolist()}
+
+
+def step(tracker, stamp, clusters):
+    ids = np.array(sorted(t for c in clusters for t in c), np.int64)
+    labels = np.array([next(k for k, c in enumerate(clusters) if t in c) for t in ids])
+    return tracker.update(stamp, "odom", ids, np.column_stack([ids, np.zeros(len(ids))]).astype(float), labels)
+
+
+def test_composition_tracking_through_a_split_a_merge_and_a_swap():
+    tr = CompositionTracker()
+    g = step(tr, 0.0, [{1, 2, 3, 4}, {5}])
+    assert groups_of(g) == {0: {1, 2, 3, 4}} and g.centroid[0] == pytest.approx([2.5, 0]) and g.age[0] == 0
+    assert step(tr, 1.0, [{1, 2, 3, 4}, {5}]).age[0] == 1.0  # the same members: one second old
+    # split: both halves are subsets of {1,2,3,4}; {1,2} (smallest id first) keeps its id, {3,4} gets a new one
+    g = step(tr, 2.0, [{1, 2}, {3, 4}, {5}])
+    assert groups_of(g) == {0: {1, 2}, 1: {3, 4}} and list(g.age) == [0.0, 0.0]  # new member sets: age restarts
+    # merge: subsets {1,2} (id 0) and {3,4} (id 1) of equal size and age, and the remembered {1,2,3,4} (id 0,
+    # larger): id 0
+    g = step(tr, 3.0, [{1, 2, 3, 4}, {5}])
+    assert groups_of(g) == {0: {1, 2, 3, 4}}
+    assert g.age[0] == 3.0  # {1,2,3,4} has existed since 0 s while remembered (SPENCER's age)
+    # member swap: {1,5} is neither a subset nor a superset of any remembered set: a new id
+    g = step(tr, 4.0, [{1, 5}, {2}, {3}, {4}])
+    assert groups_of(g) == {2: {1, 5}}
+    # the larger of two candidates wins, and one id is never given twice in a cycle
+    tr = CompositionTracker()
+    step(tr, 0.0, [{1, 2}, {3, 4, 5}])
+    g = step(tr, 1.0, [{1, 2, 3, 4, 5}])
+    assert groups_of(g) == {1: {1, 2, 3, 4, 5}}
+
+
+def test_composition_memory_forgets_the_oldest():
+    tr = CompositionTracker(memory=2)
+    step(tr, 0.0, [{1, 2}])
+    step(tr, 1.0, [{3, 4}])
+    step(tr, 2.0, [{5, 6}])  # {1,2} is pushed out of the memory of two
+    assert groups_of(step(tr, 3.0, [{1, 2}])) == {3: {1, 2}}
+
+
+def test_long_term_relations_rise_and_fall_at_spencers_rates():
+    lt = LongTermRelations()
+    a, b = np.array([1]), np.array([2])
+    assert lt.smooth(0.0, a, b, np.array([0.9]), np.array([1.0]))[0] == 0.0  # new pairs start at 0
+    assert lt.smooth(3.5, a, b, np.array([0.9]), np.array([1.0]))[0] == pytest.approx(0.5)  # 0.5 in 3.5 s
+    assert lt.smooth(4.5, a, b, np.array([0.1]), np.array([1.0]))[0] == pytest.approx(0.5 - 0.5 / 40)  # slow decay
+    assert lt.smooth(5.5, a, b, np.array([0.9]), np.array([4.5]))[0] == pytest.approx(0.4875 - 0.1)  # far: fast
+    assert lt.smooth(6.5, np.array([2]), np.array([3]), np.array([0.9]), np.array([1.0]))[0] == pytest.approx(
+        0.5 / 3.5)  # pair (1, 2) forgotten; (2, 3) new, one second of growth from 0
+
+
+def test_the_stage_groups_walkers_side_by_side_and_not_a_passer_by():
+    stage = CoherentMotionGroups(model="spencer")
+    t = tracks([4, 7, 9], [[0, 0], [0, 0.8], [1.0, 2.0]], [[1.2, 0], [1.2, 0], [-1.2, 0]])
+    relations, groups = stage.update(0.0, t)
+    assert list(zip(relations.track_a, relations.track_b)) == [(4, 7), (4, 9), (7, 9)]
+    assert relations.strength[1] == relations.strength[2] == GATED_STRENGTH  # opposite headings
+    assert groups_of(groups) == {0: {4, 7}} and groups.centroid[0] == pytest.approx([0, 0.4])
