@@ -153,3 +153,22 @@ def test_the_stage_groups_walkers_side_by_side_and_not_a_passer_by():
     assert list(zip(relations.track_a, relations.track_b)) == [(4, 7), (4, 9), (7, 9)]
     assert relations.strength[1] == relations.strength[2] == GATED_STRENGTH  # opposite headings
     assert groups_of(groups) == {0: {4, 7}} and groups.centroid[0] == pytest.approx([0, 0.4])
+
+
+def test_components_are_scipys_connected_components_on_random_graphs():
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from pipeline.groups.detection import components
+
+    rng = np.random.default_rng(1)
+    for _ in range(200):
+        n = int(rng.integers(1, 60))
+        m = int(rng.integers(0, 2 * n))
+        a, b = rng.integers(0, n, m), rng.integers(0, n, m)
+        ours = components(n, a, b)
+        _, theirs = connected_components(coo_matrix((np.ones(m), (a, b)), shape=(n, n)), directed=False)
+        # the same partition, labelled in the order of each component's smallest node
+        assert (ours[:, None] == ours[None]).tolist() == (theirs[:, None] == theirs[None]).tolist()
+        first = [int(np.flatnonzero(ours == k)[0]) for k in range(ours.max() + 1)]
+        assert first == sorted(first)

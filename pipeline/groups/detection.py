@@ -11,10 +11,25 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.cluster.hierarchy import fcluster, linkage
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 LINKAGES = ("single", "complete", "average")
+
+
+def components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Connected components of the graph of ``n`` nodes and edges (a, b), labelled 0..k-1 in the order of their
+    smallest node: each node takes the least label among its neighbours', with pointer jumping, until none changes
+    (a few passes for the small chains of a crowd; scipy's csgraph costs more in checking its input at this size)."""
+    labels = np.arange(n)
+    while len(a):
+        least = np.minimum(labels[a], labels[b])
+        new = labels.copy()
+        np.minimum.at(new, a, least)
+        np.minimum.at(new, b, least)
+        new = new[new]
+        if np.array_equal(new, labels):
+            break
+        labels = new
+    return np.unique(labels, return_inverse=True)[1]
 
 
 def detect_groups(n: int, i: np.ndarray, j: np.ndarray, strength: np.ndarray, threshold: float = 0.5,
@@ -22,8 +37,7 @@ def detect_groups(n: int, i: np.ndarray, j: np.ndarray, strength: np.ndarray, th
     """A cluster label per track (rows 0..n-1; labels 0..k-1, singletons included) from the relations (i, j,
     strength) between rows i and j."""
     link = strength >= threshold
-    graph = coo_matrix((np.ones(int(link.sum())), (i[link], j[link])), shape=(n, n))
-    _, labels = connected_components(graph, directed=False)
+    labels = components(n, i[link], j[link])
     if method == "single" or n < 3:
         return labels
     sizes = np.bincount(labels)

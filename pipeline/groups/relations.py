@@ -8,7 +8,7 @@ mover differs by the mover's own heading). Pairs past any gate (farther than 3 m
 headings more than pi/4 apart; strict) get strength 0.1 without the classifier; the others get the classifier's
 probability that the two walk together.
 
-Classifiers (``RelationModel``): ``spencer``, the released default of SPENCER, a linear nu-SVC on the raw indicators
+Classifiers (``load_model``): ``spencer``, the released default of SPENCER, a linear nu-SVC on the raw indicators
 with libsvm's Platt sigmoid; ``svm``, ours, a linear SVM on the cubic monomials of the standardised indicators (the
 function class of a cubic polynomial kernel) with a Platt sigmoid fitted on held-out seeds; ``forest``, ours, a
 random forest whose leaves hold the share of related pairs. Ours are trained on pairs of tracker output labelled by
@@ -20,6 +20,7 @@ tracker's noise; they ship in ``models/`` as plain arrays.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import json
 from dataclasses import dataclass
@@ -36,20 +37,47 @@ GATED_STRENGTH = 0.1  # spatial_relations.cpp: a gated pair is related with prob
 INDICATORS = ("distance", "speed_difference", "heading_difference")
 
 
-def indicators(position: np.ndarray, velocity: np.ndarray, min_speed: float = 0.1):
-    """(i, j, x) for every pair i < j of ``n`` tracks: x [pairs, 3] holds the distance (m), the speed difference
-    (m/s) and the heading difference (rad, in [0, pi]; a track slower than ``min_speed`` heads at 0 rad)."""
-    i, j = np.triu_indices(len(position), 1)
+@functools.lru_cache(maxsize=64)
+def pairs(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Rows (i, j) of every pair i < j of ``n`` (read-only: shared between calls)."""
+    i, j = np.triu_indices(n, 1)
+    i.flags.writeable = j.flags.writeable = False
+    return i, j
+
+
+def indicators(position: np.ndarray, velocity: np.ndarray, min_speed: float = 0.1, i: np.ndarray | None = None,
+               j: np.ndarray | None = None):
+    """(i, j, x) for the pairs of tracks (rows) i and j, every pair i < j when not given: x [pairs, 3] holds the
+    distance (m), the speed difference (m/s) and the heading difference (rad, in [0, pi]; a track slower than
+    ``min_speed`` heads at 0 rad)."""
+    if i is None:
+        i, j = pairs(len(position))
     speed = np.hypot(velocity[:, 0], velocity[:, 1])
     heading = np.where(speed >= min_speed, np.arctan2(velocity[:, 1], velocity[:, 0]), 0.0)
-    turn = np.abs(np.remainder(heading[i] - heading[j] + np.pi, 2 * np.pi) - np.pi)
+    turn = np.abs(heading[i] - heading[j])
+    turn = np.where(turn > np.pi, 2 * np.pi - turn, turn)  # both in [-pi, pi]: the difference wraps once at most
     distance = np.hypot(position[i, 0] - position[j, 0], position[i, 1] - position[j, 1])
     return i, j, np.column_stack([distance, np.abs(speed[i] - speed[j]), turn])
 
 
 def monomials(z: np.ndarray, powers: np.ndarray) -> np.ndarray:
-    """The products prod_k z[:, k] ** powers[m, k] for each row of ``powers`` [m, d]."""
-    return np.prod(z[:, None, :] ** powers[None], axis=2)
+    """The products prod_k z[:, k] ** powers[m, k] for each row of ``powers`` [m, d], as products of columns (a
+    power of an array by an array of exponents is ten times slower)."""
+    factors = _factors(powers.tobytes(), powers.shape)
+    out = np.ones((len(z), len(powers)))
+    ones_z = np.column_stack([z, np.ones(len(z))])
+    for column in factors.T:
+        out *= ones_z[:, column]
+    return out
+
+
+@functools.lru_cache(maxsize=8)
+def _factors(key: bytes, shape: tuple[int, int]) -> np.ndarray:
+    """[m, degree] column indices whose product is each monomial (index d: the constant 1)."""
+    powers = np.frombuffer(key, np.int64).reshape(shape)
+    degree = int(powers.sum(axis=1).max())
+    rows = [sum(([k] * int(p) for k, p in enumerate(row)), []) for row in powers]
+    return np.array([r + [shape[1]] * (degree - len(r)) for r in rows], np.int64).reshape(shape[0], degree)
 
 
 def monomial_powers(dim: int, degree: int) -> np.ndarray:
@@ -134,12 +162,16 @@ class RelationEstimator:
         self.min_speed = min_speed
 
     def strengths(self, position: np.ndarray, velocity: np.ndarray):
-        """(i, j, strength) of every pair i < j of tracks by row."""
-        i, j, x = indicators(position, velocity, self.min_speed)
+        """(i, j, strength) of every pair i < j of tracks by row; the indicators only of the pairs within the
+        distance gate (a crowd's pairs are most of them farther)."""
+        i, j = pairs(len(position))
+        x, y = position[:, 0], position[:, 1]
+        near = np.flatnonzero((x[i] - x[j]) ** 2 + (y[i] - y[j]) ** 2 <= (self.limits[0] + 1e-9) ** 2)
+        _, _, features = indicators(position, velocity, self.min_speed, i[near], j[near])
+        passes = (features <= self.limits).all(axis=1)
         strength = np.full(len(i), GATED_STRENGTH)
-        inside = (x <= self.limits).all(axis=1)
-        if inside.any():
-            strength[inside] = self.classifier.predict_proba(x[inside])
+        if passes.any():
+            strength[near[passes]] = self.classifier.predict_proba(features[passes])
         return i, j, strength
 
 

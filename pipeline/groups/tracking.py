@@ -34,27 +34,27 @@ class CompositionTracker:
     def update(self, stamp: float, frame: str, track_id: np.ndarray, position: np.ndarray,
                labels: np.ndarray) -> TrackedGroups:
         """The groups of this cycle's clusters (``labels``, one per track) of two or more tracks."""
-        sizes = np.bincount(labels) if len(labels) else np.zeros(0, np.int64)
-        order = np.argsort(labels, kind="stable")
-        starts = np.concatenate([[0], np.cumsum(sizes)])
-        clusters = [order[starts[c]:starts[c + 1]] for c in np.flatnonzero(sizes >= 2)]
-        clusters.sort(key=lambda rows: track_id[rows].min())
+        by_label: dict[int, list[int]] = {}
+        for t, label in zip(track_id.tolist(), labels.tolist()):
+            by_label.setdefault(label, []).append(t)
+        clusters = sorted(((min(m), label, m) for label, m in by_label.items() if len(m) >= 2))
         used, ids, ages = set(), [], []
-        for rows in clusters:
-            members = frozenset(track_id[rows].tolist())
+        for _, _, members in clusters:
+            members = frozenset(members)
             group_id = self._match(members, used)
             if group_id is None:
                 group_id = self.next_id
             self.next_id = max(self.next_id, group_id + 1)
             used.add(group_id)
-            since = self._remember(members, group_id, stamp)
             ids.append(group_id)
-            ages.append(max(0.0, stamp - since))
-        member_rows = np.concatenate(clusters) if clusters else np.zeros(0, np.int64)
-        member_group = np.repeat(np.array(ids, np.int64), [len(rows) for rows in clusters])
-        centroid = np.array([position[rows].mean(axis=0) for rows in clusters]).reshape(-1, 2)
-        return TrackedGroups(stamp, frame, np.array(ids, np.int64), centroid, member_group,
-                             track_id[member_rows].astype(np.int64), np.array(ages, float))
+            ages.append(max(0.0, stamp - self._remember(members, group_id, stamp)))
+        sizes = np.bincount(labels, minlength=1)
+        centroid = np.column_stack([np.bincount(labels, position[:, k], minlength=1) for k in (0, 1)]) / np.maximum(
+            sizes, 1)[:, None]
+        picked = np.array([label for _, label, _ in clusters], np.int64)
+        return TrackedGroups(stamp, frame, np.array(ids, np.int64), centroid[picked].reshape(-1, 2),
+                             np.repeat(np.array(ids, np.int64), sizes[picked]),
+                             np.array([t for _, _, m in clusters for t in m], np.int64), np.array(ages, float))
 
     def _match(self, members: frozenset, used: set[int]) -> int | None:
         """The id of the largest (then oldest) remembered subset or superset of ``members`` not used this cycle."""
