@@ -172,3 +172,35 @@ def test_components_are_scipys_connected_components_on_random_graphs():
         assert (ours[:, None] == ours[None]).tolist() == (theirs[:, None] == theirs[None]).tolist()
         first = [int(np.flatnonzero(ours == k)[0]) for k in range(ours.max() + 1)]
         assert first == sorted(first)
+
+
+@pytest.mark.parametrize("model", ["svm", "forest", "spencer"])
+def test_a_passport_queue_of_strangers_is_one_group_only_with_single_linkage(model):
+    # eight strangers standing in line 0.7 m apart (the airport's queue spacing), their tracks jittering by 5 cm and
+    # 5 cm/s: every classifier relates neighbours (standing 0.7 m apart is what a conversation group looks like too),
+    # so SPENCER's single linkage chains the whole queue; complete linkage keeps groups to neighbours
+    rng = np.random.default_rng(3)
+    n = 8
+    queue = tracks(np.arange(1, n + 1), np.column_stack([np.zeros(n), 0.7 * np.arange(n)]) + rng.normal(0, 0.05, (n, 2)),
+                   rng.normal(0, 0.05, (n, 2)))
+    _, single = CoherentMotionGroups(model=model, linkage="single").update(0.0, queue)
+    assert [len(m) for m in groups_of(single).values()] == [n]
+    _, complete = CoherentMotionGroups(model=model, linkage="complete").update(0.0, queue)
+    assert max(len(m) for m in groups_of(complete).values()) <= 3
+
+
+@pytest.mark.parametrize("method", ["complete", "average"])
+def test_agglomerate_cuts_as_scipys_linkage_and_fcluster(method):
+    from scipy.cluster.hierarchy import fcluster, linkage
+    from scipy.spatial.distance import squareform
+
+    from pipeline.groups.detection import agglomerate
+
+    rng = np.random.default_rng(2)
+    for _ in range(100):
+        k = int(rng.integers(2, 14))
+        d = rng.uniform(0, 1, (k, k))
+        d = np.triu(d, 1) + np.triu(d, 1).T
+        ours = agglomerate(d, 0.5, method)
+        theirs = fcluster(linkage(squareform(d), method=method), 0.5, criterion="distance")
+        assert (ours[:, None] == ours[None]).tolist() == (theirs[:, None] == theirs[None]).tolist()

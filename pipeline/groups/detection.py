@@ -3,14 +3,13 @@
 ``single`` is SPENCER's (``tracked_groups.py``: single-linkage clustering of 1 - strength cut at 0.5, i.e. the
 connected components of the pairs at or above the threshold; the ROS book chapter Sec. 5.2). It chains: a queue of
 strangers, each near the next, becomes one group. ``complete`` and ``average`` cluster each connected component
-again by complete or average linkage (scipy's), so a group needs every pair (complete) or its pairs on average
+again by complete or average linkage (``agglomerate``), so a group needs every pair (complete) or its pairs on average
 (average) at the threshold; a pair missing from the relations has strength 0 there, as in SPENCER.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.cluster.hierarchy import fcluster, linkage
 
 LINKAGES = ("single", "complete", "average")
 
@@ -38,18 +37,39 @@ def detect_groups(n: int, i: np.ndarray, j: np.ndarray, strength: np.ndarray, th
     strength) between rows i and j."""
     link = strength >= threshold
     labels = components(n, i[link], j[link])
-    if method == "single" or n < 3:
+    if method == "single":
         return labels
-    sizes = np.bincount(labels)
-    out, next_label = labels.copy(), labels.max() + 1 if n else 0
+    sizes = np.bincount(labels) if n else np.zeros(0, np.int64)
     for component in np.flatnonzero(sizes >= 3):
         rows = np.flatnonzero(labels == component)
         distance = np.ones((len(rows), len(rows)))
         inside = np.isin(i, rows) & np.isin(j, rows)
         a, b = np.searchsorted(rows, i[inside]), np.searchsorted(rows, j[inside])
         distance[a, b] = distance[b, a] = 1.0 - strength[inside]
-        condensed = distance[np.triu_indices(len(rows), 1)]
-        parts = fcluster(linkage(condensed, method=method), 1.0 - threshold, criterion="distance")
-        out[rows] = np.where(parts == 1, component, next_label + parts - 2)
-        next_label += parts.max() - 1
-    return np.unique(out, return_inverse=True)[1]
+        parts = agglomerate(distance, 1.0 - threshold, method)
+        labels[rows[parts > 0]] = n + component * n + parts[parts > 0]  # part 0 keeps the component's label
+    return np.unique(labels, return_inverse=True)[1] if n else labels
+
+
+def agglomerate(distance: np.ndarray, cut: float, method: str) -> np.ndarray:
+    """Agglomerative clustering of a small distance matrix by complete or average linkage (UPGMA), stopped where
+    the closest two clusters are farther than ``cut``: a part per row, 0..k-1. Both linkages never merge at a
+    smaller distance than before (no inversions), so stopping there is scipy's ``fcluster(..., criterion=
+    "distance")`` of the whole tree, without its checks, which cost ten times the clustering at this size."""
+    d = distance.astype(float).copy()
+    np.fill_diagonal(d, np.inf)
+    part, size = np.arange(len(d)), np.ones(len(d))
+    alive = np.ones(len(d), bool)
+    while alive.sum() > 1:
+        masked = np.where(alive[:, None] & alive[None], d, np.inf)
+        a, b = divmod(int(np.argmin(masked)), len(d))
+        if masked[a, b] > cut:
+            break
+        merged = np.maximum(d[a], d[b]) if method == "complete" else (size[a] * d[a] + size[b] * d[b]) / (
+            size[a] + size[b])
+        d[a], d[:, a] = merged, merged
+        d[a, a] = np.inf
+        size[a] += size[b]
+        alive[b] = False
+        part[part == b] = a
+    return np.unique(part, return_inverse=True)[1]
