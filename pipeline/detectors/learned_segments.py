@@ -18,6 +18,7 @@ the ray (``laser_segments`` uses offset 0 and pi/8 per metre of width, the geome
 
 from __future__ import annotations
 
+import functools
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -71,16 +72,30 @@ class Forest:
     roots: np.ndarray
 
     def predict_proba(self, x: np.ndarray) -> np.ndarray:
-        """P(person) of each row of ``x`` [n, 13]: all rows down all trees at once, one level per step."""
+        """P(person) of each row of ``x`` [n, 13]: all rows down all trees at once, one level per step, as many
+        steps as the deepest tree is deep (a leaf leads to itself)."""
         x = np.asarray(x, np.float32)
-        node = np.tile(self.roots, (len(x), 1))
-        rows = np.arange(len(x))[:, None]
-        inner = self.left[node] >= 0
-        while inner.any():
-            go_left = x[rows, np.maximum(self.feature[node], 0)] <= self.threshold[node]
-            node = np.where(inner, np.where(go_left, self.left[node], self.right[node]), node)
-            inner = self.left[node] >= 0
-        return self.value[node].mean(axis=1)
+        feature, threshold, children, depth = self._walk
+        node = np.tile(self.roots, len(x))
+        flat_x = x.ravel()
+        base = np.repeat(np.arange(len(x)) * x.shape[1], len(self.roots)) if len(x) else np.zeros(0, np.int64)
+        for _ in range(depth):
+            node = children[2 * node + (flat_x[base + feature[node]] > threshold[node])]
+        return self.value[node].reshape(len(x), len(self.roots)).mean(axis=1)
+
+    @functools.cached_property
+    def _walk(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """The nodes' features (0 at leaves), thresholds, children interleaved (2i: left, 2i + 1: right; a leaf's
+        both itself) and the deepest tree's depth."""
+        leaf = self.left < 0
+        nodes = np.arange(len(self.left))
+        children = np.column_stack([np.where(leaf, nodes, self.left), np.where(leaf, nodes, self.right)]).ravel()
+        depth, level = 0, self.roots.copy()
+        while len(level):
+            level = np.concatenate([self.left[level], self.right[level]])
+            level = level[level >= 0]
+            depth += 1
+        return np.where(leaf, 0, self.feature), self.threshold, children, depth - 1
 
 
 @dataclass(frozen=True)

@@ -40,13 +40,14 @@ def detect_groups(n: int, i: np.ndarray, j: np.ndarray, strength: np.ndarray, th
     if method == "single":
         return labels
     sizes = np.bincount(labels) if n else np.zeros(0, np.int64)
-    for component in np.flatnonzero(sizes >= 3):
+    big = np.flatnonzero(sizes >= 3)
+    if not len(big):
+        return labels
+    distance = np.ones((n, n))
+    distance[i, j] = distance[j, i] = 1.0 - strength
+    for component in big:
         rows = np.flatnonzero(labels == component)
-        distance = np.ones((len(rows), len(rows)))
-        inside = np.isin(i, rows) & np.isin(j, rows)
-        a, b = np.searchsorted(rows, i[inside]), np.searchsorted(rows, j[inside])
-        distance[a, b] = distance[b, a] = 1.0 - strength[inside]
-        parts = agglomerate(distance, 1.0 - threshold, method)
+        parts = agglomerate(distance[np.ix_(rows, rows)], 1.0 - threshold, method)
         labels[rows[parts > 0]] = n + component * n + parts[parts > 0]  # part 0 keeps the component's label
     return np.unique(labels, return_inverse=True)[1] if n else labels
 
@@ -57,19 +58,18 @@ def agglomerate(distance: np.ndarray, cut: float, method: str) -> np.ndarray:
     smaller distance than before (no inversions), so stopping there is scipy's ``fcluster(..., criterion=
     "distance")`` of the whole tree, without its checks, which cost ten times the clustering at this size."""
     d = distance.astype(float).copy()
-    np.fill_diagonal(d, np.inf)
-    part, size = np.arange(len(d)), np.ones(len(d))
-    alive = np.ones(len(d), bool)
-    while alive.sum() > 1:
-        masked = np.where(alive[:, None] & alive[None], d, np.inf)
-        a, b = divmod(int(np.argmin(masked)), len(d))
-        if masked[a, b] > cut:
+    np.fill_diagonal(d, np.inf)  # a merged-away cluster's row and column become inf too
+    k = len(d)
+    part, size = np.arange(k), np.ones(k)
+    for _ in range(k - 1):
+        a, b = divmod(int(np.argmin(d)), k)
+        if d[a, b] > cut:
             break
         merged = np.maximum(d[a], d[b]) if method == "complete" else (size[a] * d[a] + size[b] * d[b]) / (
             size[a] + size[b])
         d[a], d[:, a] = merged, merged
+        d[b], d[:, b] = np.inf, np.inf
         d[a, a] = np.inf
         size[a] += size[b]
-        alive[b] = False
         part[part == b] = a
     return np.unique(part, return_inverse=True)[1]
