@@ -452,10 +452,10 @@ MAP_FILTER = Schema({
 # the group stage (pipeline/groups: relations, detection, composition tracking; SPENCER's defaults, a test keeps
 # them equal to the class's)
 COHERENT_MOTION = Schema({
-    "model": F("str", "svm",
-               doc="relation classifier: svm (ours: linear SVM on cubic monomials + Platt, trained on tracker output "
-                   "by `crowdsim experiment train-relations`), forest (ours: random forest), spencer (SPENCER's "
-                   "released linear SVM, groups_probabilistic_small.model), or the path of a model train-relations "
+    "model": F("str", "spencer",
+               doc="relation classifier: spencer (SPENCER's released linear SVM, groups_probabilistic_small.model), "
+                   "svm (ours: linear SVM on cubic monomials + Platt) or forest (ours: random forest), both trained "
+                   "on airport tracker output by `crowdsim experiment train-relations`, or the path of a model it "
                    "wrote"),
     "threshold": F("float", 0.5, min=0.0, max=1.0,
                    doc="least relation strength that joins two tracks (SPENCER's tracked_groups.py: 0.5)"),

@@ -17,9 +17,10 @@ __all__ = ["CoherentMotionGroups", "LINKAGES"]
 class CoherentMotionGroups:
     """``update(stamp, tracks) -> (SocialRelations, TrackedGroups)``: every pair of tracks with its strength
     (relations.py), clusters of the pairs at or above ``threshold`` (detection.py, by ``linkage``), and their ids
-    kept by composition (tracking.py). ``smoothing``: SPENCER's long-term relations between the two."""
+    kept by composition (tracking.py). ``smoothing``: SPENCER's long-term relations between the two. The defaults
+    are SPENCER's group stage as released (its model, single linkage at 0.5); the airport's is ours."""
 
-    def __init__(self, model: str = "svm", threshold: float = 0.5, linkage: str = "single", smoothing: bool = False,
+    def __init__(self, model: str = "spencer", threshold: float = 0.5, linkage: str = "single", smoothing: bool = False,
                  max_distance: float = 3.0, max_speed_difference: float = 1.0,
                  max_heading_difference: float = np.pi / 4, min_speed: float = 0.1, memory: int = 300):
         self.relations = RelationEstimator(model, max_distance, max_speed_difference, max_heading_difference,

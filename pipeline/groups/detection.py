@@ -43,33 +43,46 @@ def detect_groups(n: int, i: np.ndarray, j: np.ndarray, strength: np.ndarray, th
     big = np.flatnonzero(sizes >= 3)
     if not len(big):
         return labels
-    distance = np.ones((n, n))
-    distance[i, j] = distance[j, i] = 1.0 - strength
-    for component in big:
-        rows = np.flatnonzero(labels == component)
-        parts = agglomerate(distance[np.ix_(rows, rows)], 1.0 - threshold, method)
-        labels[rows[parts > 0]] = n + component * n + parts[parts > 0]  # part 0 keeps the component's label
+    # the rows of every component of three or more, clustered together: a pair of two components is below the
+    # threshold, so no linkage joins them
+    rows = np.flatnonzero(np.isin(labels, big))
+    at = np.full(n, -1)
+    at[rows] = np.arange(len(rows))
+    keep = (at[i] >= 0) & (at[j] >= 0)
+    distance = np.ones((len(rows), len(rows)))
+    distance[at[i[keep]], at[j[keep]]] = distance[at[j[keep]], at[i[keep]]] = 1.0 - strength[keep]
+    labels[rows] = n + agglomerate(distance, 1.0 - threshold, method)
     return np.unique(labels, return_inverse=True)[1] if n else labels
 
 
 def agglomerate(distance: np.ndarray, cut: float, method: str) -> np.ndarray:
     """Agglomerative clustering of a small distance matrix by complete or average linkage (UPGMA), stopped where
-    the closest two clusters are farther than ``cut``: a part per row, 0..k-1. Both linkages never merge at a
-    smaller distance than before (no inversions), so stopping there is scipy's ``fcluster(..., criterion=
-    "distance")`` of the whole tree, without its checks, which cost ten times the clustering at this size."""
+    the closest two clusters are farther than ``cut``: a part per row, 0..k-1. Each step merges every pair of
+    clusters that are each other's nearest within ``cut`` at once: both linkages are reducible (a merge never brings
+    a third cluster nearer), so the tree is the one merging a pair at a time builds (the nearest-neighbour chain's
+    argument, Murtagh 1983), in a few steps instead of one per merge; and both never merge at a smaller distance
+    than before, so stopping at ``cut`` is scipy's ``fcluster(..., criterion="distance")`` of the whole tree."""
     d = distance.astype(float).copy()
     np.fill_diagonal(d, np.inf)  # a merged-away cluster's row and column become inf too
     k = len(d)
-    part, size = np.arange(k), np.ones(k)
-    for _ in range(k - 1):
-        a, b = divmod(int(np.argmin(d)), k)
-        if d[a, b] > cut:
+    part, size, rows = np.arange(k), np.ones(k), np.arange(k)
+    while True:
+        nearest = np.argmin(d, axis=1)
+        a = np.flatnonzero((nearest[nearest] == rows) & (rows < nearest) & (d[rows, nearest] <= cut))
+        if not len(a):
             break
-        merged = np.maximum(d[a], d[b]) if method == "complete" else (size[a] * d[a] + size[b] * d[b]) / (
-            size[a] + size[b])
-        d[a], d[:, a] = merged, merged
-        d[b], d[:, b] = np.inf, np.inf
-        d[a, a] = np.inf
+        b = nearest[a]
+        # rows, then columns: for disjoint pairs this is the linkage over the four blocks
+        if method == "complete":
+            d[a] = np.maximum(d[a], d[b])
+            d[:, a] = np.maximum(d[:, a], d[:, b])
+        else:
+            w = (size[a] / (size[a] + size[b]))[:, None]
+            d[a] = w * d[a] + (1 - w) * d[b]
+            d[:, a] = w.T * d[:, a] + (1 - w.T) * d[:, b]
+        d[b], d[:, b], d[a, a] = np.inf, np.inf, np.inf
         size[a] += size[b]
-        part[part == b] = a
+        relabel = np.arange(k)
+        relabel[b] = a
+        part = relabel[part]
     return np.unique(part, return_inverse=True)[1]

@@ -57,7 +57,8 @@ class CompositionTracker:
                              np.array([t for _, _, m in clusters for t in m], np.int64), np.array(ages, float))
 
     def _match(self, members: frozenset, used: set[int]) -> int | None:
-        """The id of the largest (then oldest) remembered subset or superset of ``members`` not used this cycle."""
+        """The id of the largest (then oldest, then first remembered) subset or superset of ``members`` not used this
+        cycle."""
         best = None
         for entry in set().union(*(self.by_track.get(t, ()) for t in members)):
             held, group_id, since = self.memory[entry]
@@ -68,12 +69,15 @@ class CompositionTracker:
         return None if best is None else best[1]
 
     def _remember(self, members: frozenset, group_id: int, stamp: float) -> float:
-        """Store ``members`` as the newest entry; since when this exact set has existed."""
-        since = stamp
+        """Store ``members`` as the newest entry; since when this exact set has existed. A set already remembered
+        keeps its entry (and so its place among equals in ``_match``), moved to the newest end."""
         old = self.by_members.get(members)
         if old is not None:
-            since = min(since, self.memory[old][2])
-            self._forget(old)
+            since = min(stamp, self.memory[old][2])
+            self.memory[old] = (members, group_id, since)
+            self.memory.move_to_end(old)
+            return since
+        since = stamp
         entry = self.next_entry
         self.next_entry += 1
         self.memory[entry] = (members, group_id, since)
