@@ -306,31 +306,44 @@ def _cmd_experiment(args) -> int:
     return 0
 
 
-def _cmd_train_detector(args) -> int:
-    from .outdir import check_out_dir, write_directory
+def _training_out(args) -> Path | None:
+    """A training command's ``--out`` (None: the shipped models' folder), checked to be new or empty, once
+    scikit-learn is known to be there."""
+    from .outdir import check_out_dir
 
-    if not 1 <= args.seeds <= 1000:
-        raise UsageError(f"--seeds: expected 1 to 1000 training seeds, got {args.seeds}")
-    if args.workers < 1:
-        raise UsageError(f"--workers: expected at least 1 process, got {args.workers}")
     out = Path(args.out) if args.out else None
     if out is not None:
         check_out_dir(out)
     try:
         import sklearn  # noqa: F401
     except ImportError:
-        raise UsageError('experiment train-detector needs scikit-learn, of the train extra: '
+        raise UsageError(f'experiment {args.what} needs scikit-learn, of the train extra: '
                          'pip install -e ".[train]"') from None
+    return out
+
+
+def _saved(models, save_models, out: Path | None, models_dir: Path) -> list[Path]:
+    """``save_models`` into the shipped models' folder, or into ``out`` whole (written beside, then moved)."""
+    from .outdir import write_directory
+
+    if out is None:
+        return save_models(models, models_dir)
+    return [out / p.name for p in write_directory(out, lambda tmp: save_models(models, tmp))]
+
+
+def _cmd_train_detector(args) -> int:
+    if not 1 <= args.seeds <= 1000:
+        raise UsageError(f"--seeds: expected 1 to 1000 training seeds, got {args.seeds}")
+    if args.workers < 1:
+        raise UsageError(f"--workers: expected at least 1 process, got {args.workers}")
+    out = _training_out(args)
     from pipeline.detectors.learned_segments import MODELS_DIR
 
     from .experiments.train_detector import save_models, train
 
     t0 = time.perf_counter()
     models, report = train(args.seeds, quick=args.quick, workers=args.workers)
-    if out is None:
-        paths = save_models(models, MODELS_DIR)
-    else:
-        paths = [out / p.name for p in write_directory(out, lambda tmp: save_models(models, tmp))]
+    paths = _saved(models, save_models, out, MODELS_DIR)
     print(report)
     print(f"{time.perf_counter() - t0:.0f} s; models: " + ", ".join(f"{p} ({p.stat().st_size / 1024:.0f} KiB)"
                                                                    for p in paths))
@@ -338,29 +351,17 @@ def _cmd_train_detector(args) -> int:
 
 
 def _cmd_train_relations(args) -> int:
-    from .outdir import check_out_dir, write_directory
-
     if not 1 <= args.seeds <= 20 or args.workers < 1:
         raise UsageError(f"--seeds: expected 1 to 20 training seeds (1100-1119), and --workers at least 1; got "
                          f"{args.seeds} and {args.workers}")
-    out = Path(args.out) if args.out else None
-    if out is not None:
-        check_out_dir(out)
-    try:
-        import sklearn  # noqa: F401
-    except ImportError:
-        raise UsageError('experiment train-relations needs scikit-learn, of the train extra: '
-                         'pip install -e ".[train]"') from None
+    out = _training_out(args)
     from pipeline.groups.relations import MODELS_DIR
 
     from .experiments.relations import save_models, train
 
     t0 = time.perf_counter()
     models = train(args.seeds, args.duration or 60.0, workers=args.workers)
-    if out is None:
-        paths = save_models(models, MODELS_DIR)
-    else:
-        paths = [out / p.name for p in write_directory(out, lambda tmp: save_models(models, tmp))]
+    paths = _saved(models, save_models, out, MODELS_DIR)
     info = next(iter(models.values()))[1]
     print(f"{info['pairs']} pairs of tracks ({info['related']} related) from seeds {info['train_seeds'][0]}-"
           f"{info['train_seeds'][1]}; {time.perf_counter() - t0:.0f} s; models: "

@@ -4,20 +4,12 @@
 import json
 
 import numpy as np
-import pytest
 
 from crowdsim.cli import main
 from crowdsim.run import RELATIONS_WRITTEN
 from evaluation.io import read_table
-from test_cli import _tiny, one_error_line
-
-
-@pytest.fixture(scope="module")
-def tiny_run(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("run")
-    out = tmp / "out"
-    assert main(["run", str(_tiny(tmp)), "--out", str(out), "--quiet"]) == 0
-    return out
+from test_cli import one_error_line
+from test_evaluate_cli import tiny_run  # noqa: F401 (the fixture: a tiny room's run directory)
 
 
 def test_groups_csv_holds_each_groups_members_and_their_centroid(tiny_run):

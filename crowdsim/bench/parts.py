@@ -1,5 +1,5 @@
 """``crowdsim bench``: the speed of each hot part (crowd, laser, each of Table II's trackers at 30 and 80 tracks, with
-and without clutter) and of the whole loop, measured side by side in one run."""
+and without clutter, the group stage at 30 and 80 tracks) and of the whole loop, measured side by side in one run."""
 
 from __future__ import annotations
 
@@ -132,9 +132,9 @@ def bench_loop(quick: bool) -> dict:
 def run_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
     figures = {}
 
-    def show(key, value, unit, what):
+    def show(key, value, unit, what, digits=1):
         figures[key] = value
-        print(f"{what:66s} {value:12,.1f} {unit}", flush=True)
+        print(f"{what:66s} {value:12,.{digits}f} {unit}", flush=True)
 
     print(f"crowdsim bench on {platform.processor() or platform.machine()}, Python {platform.python_version()}"
           f"{' (quick)' if quick else ''}")
@@ -150,7 +150,7 @@ def run_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
     for key, label, stage in GROUP_STAGES:
         for n in (30, 80):
             show(f"groups_{key}_ms_per_cycle_{n}", 1e3 / bench_groups(n, quick, **stage), "ms/cycle",
-                 f"group stage, {label}, {n} tracks")
+                 f"group stage, {label}, {n} tracks", digits=2)
     loop = bench_loop(quick)
     show("loop_realtime_factor", loop["realtime_factor"], "x real time",
          f"airport loop, 2 lasers @25 Hz + tracker + CLEAR-MOT ({loop['mean_persons_in_range']:.0f} in range)")

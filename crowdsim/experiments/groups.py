@@ -12,18 +12,16 @@ group (``pipeline/groups/detection.py``).
 from __future__ import annotations
 
 import json
-from concurrent.futures import ProcessPoolExecutor
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from evaluation.groups import GroupFrame, GroupMetrics
 from pipeline.groups import CoherentMotionGroups
 from pipeline.types import TrackedGroups
 
 from .relations import DURATION, HELD_OUT_SEED, SCENARIO, GroupCycle, collect
+from .seeds import map_seeds
 
 MODELS = ("svm", "forest", "spencer")
 LINKAGES = ("single", "complete", "average")
@@ -78,18 +76,7 @@ def one_seed(seed: int, duration: float = DURATION) -> list[dict]:
 
 def run(seeds: list[int], duration: float = DURATION, workers: int = 1, progress: bool = True) -> list[list[dict]]:
     """[seed][configuration] results."""
-    out = []
-    with tqdm(total=len(seeds), unit="seed", desc="groups", disable=not progress) as bar:
-        if workers <= 1:
-            for seed in seeds:
-                out.append(one_seed(seed, duration))
-                bar.update()
-        else:
-            with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
-                for result in pool.map(one_seed, seeds, [duration] * len(seeds)):
-                    out.append(result)
-                    bar.update()
-    return out
+    return map_seeds(one_seed, seeds, duration, workers=workers, desc="groups", progress=progress)
 
 
 def pooled(results: list[list[dict]], k: int, path: tuple[str, ...]) -> float | None:

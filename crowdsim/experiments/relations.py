@@ -13,18 +13,17 @@ a seed any other evaluation uses.
 from __future__ import annotations
 
 import os
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from pipeline.groups.relations import (INDICATORS, MODEL_FILES, MODELS_DIR, PlattSvm, indicators, monomial_powers,
                                        monomials, save_model)
 from pipeline.types import TrackedPersons
 from scenarios import load_scenario
+
+from .seeds import map_seeds
 
 SCENARIO = "airport_disembarkation"
 TRAIN_SEED, CALIBRATION_SEEDS, HELD_OUT_SEED = 1100, list(range(1120, 1125)), 1200
@@ -81,19 +80,7 @@ def collect(seed: int, duration: float = DURATION) -> list[GroupCycle]:
 def collect_seeds(seeds: list[int], duration: float = DURATION, workers: int = 1,
                   progress: bool = True) -> list[list[GroupCycle]]:
     """``collect`` of each seed, in order (in ``workers`` spawned processes when more than one)."""
-    with tqdm(total=len(seeds), unit="seed", desc="simulating", disable=not progress) as bar:
-        if workers <= 1:
-            out = []
-            for seed in seeds:
-                out.append(collect(seed, duration))
-                bar.update()
-            return out
-        with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
-            out = []
-            for cycles in pool.map(collect, seeds, [duration] * len(seeds)):
-                out.append(cycles)
-                bar.update()
-            return out
+    return map_seeds(collect, seeds, duration, workers=workers, desc="simulating", progress=progress)
 
 
 def labelled_pairs(cycle: GroupCycle, min_speed: float = 0.1) -> tuple[np.ndarray, np.ndarray]:

@@ -18,11 +18,7 @@ which of the claims turn on that difference.
 
 from __future__ import annotations
 
-from concurrent.futures import ProcessPoolExecutor
-from multiprocessing import get_context
-
 import numpy as np
-from tqdm import tqdm
 
 from pipeline.assemble import TRACKERS, build_part
 from scenarios import load_scenario
@@ -31,6 +27,7 @@ from scenarios.format import TRACKER
 from scenarios.schema import validate
 
 from .recorded import Cycle, detect, record, track
+from .seeds import map_seeds
 
 SCENARIO = "airport_disembarkation"
 DETECTOR = {"type": "laser_learned", "model": "adaboost"}  # seed 000 Sec. IV-C: the boosted segment classifier
@@ -82,20 +79,7 @@ def _one_seed(seed: int, duration: float | None) -> list[dict]:
 def table2(seeds: list[int], duration: float | None = None, workers: int = 1,
            progress: bool = True) -> dict[str, np.ndarray]:
     """Per evaluation (``EVALUATIONS``), [rows, seeds, columns] of figures."""
-    bar = tqdm(total=len(seeds), unit="seed", disable=not progress, desc="table2")
-    out = []
-    try:
-        if workers <= 1:
-            for seed in seeds:
-                out.append(_one_seed(seed, duration))
-                bar.update()
-        else:
-            with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
-                for rows in pool.map(_one_seed, seeds, [duration] * len(seeds)):
-                    out.append(rows)
-                    bar.update()
-    finally:
-        bar.close()
+    out = map_seeds(_one_seed, seeds, duration, workers=workers, desc="table2", progress=progress)
     return {name: np.array([[[r[name][c] for c in COLUMNS] for r in rows] for rows in out]).transpose(1, 0, 2)
             for name in EVALUATIONS}
 

@@ -28,15 +28,14 @@ whole curve); the geometric detector gives confidence 1 to each detection, so it
 from __future__ import annotations
 
 import os
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
 from crowdsim.datasets.detection_eval import MIN_BEAMS
+from crowdsim.experiments.seeds import map_seeds
 from evaluation.detection import RADII, DetectionScores, detection_scores
 from pipeline.detectors.laser_segments import SegmentDetector
 from pipeline.detectors.learned_segments import MODEL_FILES, Forest, SegmentModel, Stumps, candidates, push_back
@@ -144,18 +143,7 @@ def collect(seed: int, duration: float, every: int = EVERY) -> Scans:
 
 def collect_seeds(seeds: list[int], duration: float, workers: int) -> list[Scans]:
     """``collect`` of each of ``seeds``, in order (in ``workers`` spawned processes when more than one)."""
-    parts = []
-    with tqdm(total=len(seeds), unit="seed", desc="simulating") as bar:
-        if workers <= 1:
-            for seed in seeds:
-                parts.append(collect(seed, duration))
-                bar.update()
-            return parts
-        with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
-            for part in pool.map(collect, seeds, [duration] * len(seeds)):
-                parts.append(part)
-                bar.update()
-    return parts
+    return map_seeds(collect, seeds, duration, workers=workers, desc="simulating")
 
 
 def stumps_from_sklearn(ada) -> Stumps:
