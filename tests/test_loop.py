@@ -194,7 +194,7 @@ def test_the_recording_holds_the_camera_images_boxes_and_the_robots_frames(tmp_p
     for entity in ("/cameras/front_depth/depth", "/cameras/front_depth/people", "/cameras/corner_cam/rgb",
                    "/cameras/corner_cam/rgb/people", "/cameras/corner_cam/segmentation", "Pinhole",
                    "/world/laser_points", "/world/tracks", "/world/robot/base_link", "/world/robot/sensors",
-                   "/world/wall_cameras", "/world/odom"):
+                   "/world/wall_cameras", "/world/odom", "/world/groups", "/world/groups/id"):
         assert entity in listing, entity
 
 
