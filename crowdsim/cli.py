@@ -492,7 +492,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_validate)
     p = sub.add_parser("scenario-keys", help="every key of the scenario format: kind, default, range, meaning")
     p.set_defaults(func=_cmd_scenario_keys)
-    p = sub.add_parser("bench", help="measure the crowd, the lasers, the tracker and the whole loop; "
+    p = sub.add_parser("bench", help="measure the crowd, the lasers, the trackers, the group stage and the loop; "
                                      "`bench sim`: the crowd against JuPedSim; `bench sensors`: every sensor; "
                                      "`bench eval`: the evaluation; `bench env`: the gym environments; `bench dataset`: "
                                      "dataset generation")

@@ -283,8 +283,8 @@ class Simulation:
         tags = self._tags(agents, near, scans, visibility)
         score = self.clearmot.update(gt.track_id, gt.position, tracks.track_id, tracks.position, tags.ignore)
         frame = Frame(self._frame, stamp, self.robot.pose.copy(), self.robot.world_T_odom, agents, scans,
-                      detections, tracks, relations, groups, gt, tags, score, visibility, self._pending_depth, self._pending_camera,
-                      collision=self._collided, detector_outputs=outputs)
+                      detections, tracks, relations, groups, gt, tags, score, visibility, self._pending_depth,
+                      self._pending_camera, collision=self._collided, detector_outputs=outputs)
         if self.planner is not None:
             self._navigate(frame)
         self._pending_depth, self._pending_camera, self._collided = [], [], False

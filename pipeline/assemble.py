@@ -1,5 +1,5 @@
-"""The pipeline as parts: the interfaces of detectors, fusion, trackers and the group stage, the built-in types by name, and
-``build_pipeline``, which makes the parts a scenario's (validated) ``pipeline`` section names.
+"""The pipeline as parts: the interfaces of detectors, fusion, trackers and the group stage, the built-in types by
+name, and ``build_pipeline``, which makes the parts a scenario's (validated) ``pipeline`` section names.
 
 A part is named by its type, a built-in one below or ``module.path:ClassName``, and made as ``cls(**params)`` with
 the section's other keys; every part starts over with ``reset()``. The scenario format (scenarios/format.py) holds

@@ -32,7 +32,8 @@ def test_indicators_by_hand():
     assert got[(1, 3)] == pytest.approx([np.hypot(3, 2), 0.45, np.radians(170)])
     assert got[(2, 3)] == pytest.approx([np.hypot(1, 2), 0.95, np.pi / 2])
     # headings 170 and -170 deg are 20 deg apart, across the wrap
-    _, _, x = indicators(np.zeros((2, 2)), np.array([[np.cos(np.radians(a)), np.sin(np.radians(a))] for a in (170, -170)]))
+    unit = np.array([[np.cos(np.radians(a)), np.sin(np.radians(a))] for a in (170, -170)])
+    _, _, x = indicators(np.zeros((2, 2)), unit)
     assert x[0, 2] == pytest.approx(np.radians(20))
 
 
@@ -40,8 +41,9 @@ def test_spencer_released_model_and_its_gates():
     # f = 3.03765 - 1.875462 d - 0.559679 dv - 0.913379 dtheta; P = 1 / (1 + exp(-1.55322 f - 0.0123641))
     for x, p in (((0, 0, 0), 0.99126), ((1, 0, 0), 0.86027), ((1.5, 0.2, 0.2), 0.47587), ((2, 0.5, 0.5), 0.096259)):
         f = 3.03765 - 1.875462017868918 * x[0] - 0.5596792850946883 * x[1] - 0.913378846604351 * x[2]
-        assert SPENCER.predict_proba(np.array([x], float))[0] == pytest.approx(1 / (1 + np.exp(-1.55322 * f - 0.0123641)))
-        assert SPENCER.predict_proba(np.array([x], float))[0] == pytest.approx(p, abs=5e-5)
+        got = SPENCER.predict_proba(np.array([x], float))[0]
+        assert got == pytest.approx(1 / (1 + np.exp(-1.55322 * f - 0.0123641)))
+        assert got == pytest.approx(p, abs=5e-5)
     est = RelationEstimator("spencer")
     # gates are strict: 3 m apart is classified, 3.01 m gated; speeds 1.01 m/s apart gated; headings past pi/4 gated
     pos = np.array([[0, 0], [3.0, 0], [0, 3.01], [-1, 0]], float)
@@ -181,8 +183,8 @@ def test_a_passport_queue_of_strangers_is_one_group_only_with_single_linkage(mod
     # so SPENCER's single linkage chains the whole queue; complete linkage keeps groups to neighbours
     rng = np.random.default_rng(3)
     n = 8
-    queue = tracks(np.arange(1, n + 1), np.column_stack([np.zeros(n), 0.7 * np.arange(n)]) + rng.normal(0, 0.05, (n, 2)),
-                   rng.normal(0, 0.05, (n, 2)))
+    line = np.column_stack([np.zeros(n), 0.7 * np.arange(n)])
+    queue = tracks(np.arange(1, n + 1), line + rng.normal(0, 0.05, (n, 2)), rng.normal(0, 0.05, (n, 2)))
     _, single = CoherentMotionGroups(model=model, linkage="single").update(0.0, queue)
     assert [len(m) for m in groups_of(single).values()] == [n]
     _, complete = CoherentMotionGroups(model=model, linkage="complete").update(0.0, queue)

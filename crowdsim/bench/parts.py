@@ -108,7 +108,8 @@ def bench_groups(n_tracks: int, quick: bool, **stage) -> float:
 
 
 # (figure key, label, the stage's parameters)
-GROUP_STAGES = (("forest_average", "forest, average linkage (the airport's)", {"model": "forest", "linkage": "average"}),
+GROUP_STAGES = (("forest_average", "forest, average linkage (the airport's)",
+                 {"model": "forest", "linkage": "average"}),
                 ("spencer_single", "spencer, single linkage (SPENCER's, the default)", {}),
                 ("svm_single", "svm, single linkage", {"model": "svm"}),
                 ("forest_complete", "forest, complete linkage", {"model": "forest", "linkage": "complete"}))

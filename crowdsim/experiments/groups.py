@@ -102,7 +102,8 @@ def report(results: list[list[dict]], seeds: list[int]) -> str:
     lines = [f"Groups on {SCENARIO}, held-out seeds {seeds[0]}..{seeds[-1]} ({len(seeds)} runs); figures are means "
              "over the runs, in %", "",
              "Relations (pairs of tracks matched to persons within 3 m; related at strength >= 0.5):", "",
-             "| tracks | model | pairs | related | precision | recall | F1 | AUC | Brier |", "|---|---|---|---|---|---|---|---|---|"]
+             "| tracks | model | pairs | related | precision | recall | F1 | AUC | Brier |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for source in SOURCES:
         for model in MODELS:
             k = index[(source, model, "single", 0.5)]

@@ -112,8 +112,8 @@ def platt(decision: np.ndarray, related: np.ndarray) -> tuple[float, float]:
 
 
 def train_svm(x: np.ndarray, y: np.ndarray, x_cal: np.ndarray, y_cal: np.ndarray) -> PlattSvm:
-    """A linear SVM (scikit-learn's LinearSVC: L2-regularised, squared hinge loss) on the cubic monomials of the standardised indicators,
-    and Platt's sigmoid on the calibration pairs."""
+    """A linear SVM (scikit-learn's LinearSVC: L2-regularised, squared hinge loss) on the cubic monomials of the
+    standardised indicators, and Platt's sigmoid on the calibration pairs."""
     from sklearn.svm import LinearSVC
 
     mean, scale = x.mean(axis=0), x.std(axis=0)

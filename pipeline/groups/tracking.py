@@ -12,7 +12,7 @@ person's solitude would fill the memory.
 
 from __future__ import annotations
 
-from collections import OrderedDict
+from collections import Counter, OrderedDict
 
 import numpy as np
 
@@ -58,15 +58,21 @@ class CompositionTracker:
 
     def _match(self, members: frozenset, used: set[int]) -> int | None:
         """The id of the largest (then oldest, then first remembered) subset or superset of ``members`` not used this
-        cycle."""
-        best = None
-        for entry in set().union(*(self.by_track.get(t, ()) for t in members)):
+        cycle: of the entries holding any member, those holding all of them (supersets) and those all of whose
+        members are among them (subsets), counted per entry."""
+        hits = Counter()
+        for t in members:
+            hits.update(self.by_track.get(t, ()))
+        best, best_key = None, None
+        for entry, k in hits.items():
             held, group_id, since = self.memory[entry]
-            if group_id in used or not (held <= members or held >= members):
+            size = len(held)
+            if group_id in used or (k != len(members) and k != size):
                 continue
-            if best is None or (len(held), -since, -entry) > (len(best[0]), -best[2], -best[3]):
-                best = (held, group_id, since, entry)
-        return None if best is None else best[1]
+            key = (size, -since, -entry)
+            if best_key is None or key > best_key:
+                best, best_key = group_id, key
+        return best
 
     def _remember(self, members: frozenset, group_id: int, stamp: float) -> float:
         """Store ``members`` as the newest entry; since when this exact set has existed. A set already remembered
