@@ -94,3 +94,18 @@ def test_the_experiment_scores_a_short_run_from_tracks_and_from_the_persons(shor
     # from the true persons every counted person is matched: every near pair of persons is scored
     assert from_truth["pairwise"]["pairs"] >= from_tracks["pairwise"]["pairs"]
     assert from_truth["true_groups"] == from_tracks["true_groups"]  # the same persons counted
+
+
+def test_the_report_tables_hold_each_configurations_figures(short_run, tmp_path):
+    import json
+
+    from crowdsim.experiments.groups import configurations, write
+
+    s = score(short_run, "tracker", "forest", "average", 0.5)
+    text = write(tmp_path, [[s] * len(configurations())], [1200])
+    f1 = f"{100 * s['t_2_3']['f1']:.1f}"
+    assert f"| tracker | forest | average | {f1} |" in text
+    assert f"| tracker | forest | {s['pairwise']['pairs']} | {s['pairwise']['positives']} |" in text
+    saved = json.loads((tmp_path / "groups.json").read_text())
+    assert len(saved["configurations"]) == 2 * 3 * 3 * 6 and saved["seeds"] == [1200]
+    assert (tmp_path / "groups.png").stat().st_size > 10_000

@@ -137,6 +137,15 @@ def report(results: list[list[dict]], seeds: list[int]) -> str:
     return "\n".join(lines)
 
 
+def _mean_curve(curves: list) -> np.ndarray:
+    """The runs' curves averaged at each threshold, over the runs where the point is defined (precision is not
+    where no pair reaches the threshold): NaN where none is."""
+    values = np.array(curves, float)
+    defined = np.isfinite(values)
+    count = defined.sum(axis=0)
+    return np.where(count > 0, np.where(defined, values, 0.0).sum(axis=0) / np.maximum(count, 1), np.nan)
+
+
 def plot(results: list[list[dict]], path) -> None:
     """ROC and precision-recall curves of each classifier (tracker solid, true persons dashed; averaged over the
     runs at each threshold), and group F1 at T = 2/3 against the threshold."""
@@ -152,9 +161,8 @@ def plot(results: list[list[dict]], path) -> None:
     for source, style in zip(SOURCES, ("-", "--")):
         for model in MODELS:
             k = index[(source, model, "single", 0.5)]
-            curves = [r[k]["curves"] for r in results]
-            fpr, tpr = (np.nanmean([c[key] for c in curves], axis=0) for key in ("fpr", "tpr"))
-            precision, recall = (np.nanmean([c[key] for c in curves], axis=0) for key in ("precision", "recall"))
+            fpr, tpr, precision, recall = (_mean_curve([r[k]["curves"][key] for r in results])
+                                           for key in ("fpr", "tpr", "precision", "recall"))
             label = f"{model}, {source}"
             axes[0].plot(fpr, tpr, style, color=colours[model], label=label)
             axes[1].plot(recall, precision, style, color=colours[model], label=label)
