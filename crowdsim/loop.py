@@ -114,7 +114,7 @@ class Simulation:
         self.dt = scenario["dt"]
         # the parts are made once (a user's may be costly to make) and start over at every reset
         self.pipeline = build_pipeline(scenario["pipeline"], [laser["name"] for laser in sensors["lasers"]],
-                                       scenario["map"])
+                                       scenario["map"], scenario.get("source", "<scenario>"))
         robot = scenario["robot"]
         self.driver = robot["driver"]
         self.goals = np.asarray(robot["goals"] or np.zeros((0, 2)), float).reshape(-1, 2)

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Protocol, Sequence
 
-from scenarios.schema import import_class
+from scenarios.schema import ScenarioError, import_class
 
 from .detectors.laser_segments import SegmentDetector
 from .detectors.learned_segments import LearnedSegmentDetector
@@ -81,21 +81,34 @@ class Pipeline:
             part.reset()
 
 
-def build_part(spec: dict, registry: dict[str, type]):
-    """The part ``spec`` names (``type`` and the parameters), made from its built-in type or a user's class."""
-    params = {key: value for key, value in spec.items() if key != "type"}
+def build_part(spec: dict, registry: dict[str, type], source: str = "<pipeline>", key: str = "pipeline"):
+    """The part ``spec`` names (``type`` and the parameters), made from its built-in type or a user's class; a
+    parameter the part refuses (a model file that is not there, say) is a ScenarioError of ``source`` at ``key``."""
+    params = {name: value for name, value in spec.items() if name != "type"}
     cls = registry[spec["type"]] if spec["type"] in registry else import_class(spec["type"])
-    return cls(**params)
+    try:
+        return cls(**params)
+    except ScenarioError:
+        raise
+    except ValueError as e:
+        raise ScenarioError(source, key, str(e)) from None
 
 
-def build_pipeline(spec: dict, lasers: Sequence[str], floor_plan: dict | None = None) -> Pipeline:
-    """The parts of a validated ``pipeline`` section: ``detector`` on each of ``lasers`` (sensor names), and each
-    sensor that ``detectors`` names gets its own detector in its place; the map filter, when the section has one,
-    on ``floor_plan`` (the scenario's ``map``: the map the robot localises in; None: no filter)."""
+def build_pipeline(spec: dict, lasers: Sequence[str], floor_plan: dict | None = None,
+                   source: str = "<pipeline>") -> Pipeline:
+    """The parts of a validated ``pipeline`` section of the scenario ``source``: ``detector`` on each of ``lasers``
+    (sensor names), and each sensor that ``detectors`` names gets its own detector in its place; the map filter, when
+    the section has one, on ``floor_plan`` (the scenario's ``map``: the map the robot localises in; None: no
+    filter)."""
     own = spec["detectors"]
-    detectors = {name: build_part(own.get(name, spec["detector"]), DETECTORS) for name in lasers}
-    detectors |= {name: build_part(detector, DETECTORS) for name, detector in own.items() if name not in detectors}
+
+    def detector(name):
+        key = f"pipeline.detectors.{name}" if name in own else "pipeline.detector"
+        return build_part(own.get(name, spec["detector"]), DETECTORS, source, key)
+
+    detectors = {name: detector(name) for name in [*lasers, *(n for n in own if n not in lasers)]}
     map_filter = (MapFilter(floor_plan["walls"], floor_plan["obstacles"], **spec["map_filter"])
                   if spec["map_filter"] is not None and floor_plan is not None else None)
-    return Pipeline(detectors, build_part(spec["fusion"], FUSIONS), build_part(spec["tracker"], TRACKERS),
-                    build_part(spec["groups"], GROUP_STAGES), map_filter)
+    return Pipeline(detectors, build_part(spec["fusion"], FUSIONS, source, "pipeline.fusion"),
+                    build_part(spec["tracker"], TRACKERS, source, "pipeline.tracker"),
+                    build_part(spec["groups"], GROUP_STAGES, source, "pipeline.groups"), map_filter)

@@ -76,7 +76,7 @@ def test_trained_classifiers_separate_synthetic_pairs_and_survive_saving(tmp_pat
 def test_a_bad_model_file_is_named(tmp_path):
     bad = tmp_path / "bad.npz"
     bad.write_text("not a model")
-    with pytest.raises(ValueError, match=f"{bad}: not a relation model"):
+    with pytest.raises(ValueError, match=f"model: {bad} is not a relation model"):
         load_model(str(bad))
 
 

@@ -74,3 +74,13 @@ def test_a_ground_truth_without_groups_is_named(tiny_run, tmp_path, capsys):
                  str(tiny_run / "relations.csv"), "--groups", str(tiny_run / "groups.csv")]) == 2
     line = one_error_line(capsys.readouterr().err)
     assert str(gt) in line and "group" in line
+
+
+def test_a_relation_model_that_is_not_there_is_one_clear_error(tmp_path, capsys):
+    scenario = tmp_path / "typo.yaml"
+    scenario.write_text("base: airport_disembarkation\nduration: 1\npipeline:\n  groups:\n    model: forrest\n")
+    assert main(["run", str(scenario), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    line = one_error_line(capsys.readouterr().err)
+    assert f"{scenario}: pipeline.groups: model: forrest is not a relation model" in line
+    assert "expected spencer, svm, forest" in line
+    assert not (tmp_path / "out").exists()

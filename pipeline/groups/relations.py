@@ -134,10 +134,10 @@ def load_model(model: str | Path) -> PlattSvm | Forest:
             header = json.loads(str(data["header"]))
             arrays = {name: data[name] for name in data.files if name != "header"}
     except (OSError, ValueError, KeyError) as e:
-        raise ValueError(f"{path}: not a relation model ({e}); expected spencer, {', '.join(MODEL_FILES)} or an "
-                         ".npz written by `crowdsim experiment train-relations`") from None
+        raise ValueError(f"model: {path} is not a relation model ({e}); expected spencer, {', '.join(MODEL_FILES)} "
+                         "or an .npz written by `crowdsim experiment train-relations`") from None
     if header.get("format") != MODEL_FORMAT:
-        raise ValueError(f"{path}: format {header.get('format')!r}; expected {MODEL_FORMAT}")
+        raise ValueError(f"model: {path} has format {header.get('format')!r}; expected {MODEL_FORMAT}")
     if header["kind"] == "svm":
         return PlattSvm(**{k: (float(v) if v.ndim == 0 else v) for k, v in arrays.items()})
     return Forest(**arrays)
