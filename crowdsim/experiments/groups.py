@@ -17,14 +17,13 @@ from pathlib import Path
 import numpy as np
 
 from evaluation.groups import GroupFrame, GroupMetrics
-from pipeline.groups import CoherentMotionGroups
+from pipeline.groups import LINKAGES, CoherentMotionGroups
 from pipeline.types import TrackedGroups
 
 from .relations import DURATION, HELD_OUT_SEED, SCENARIO, GroupCycle, collect
 from .seeds import map_seeds
 
 MODELS = ("svm", "forest", "spencer")
-LINKAGES = ("single", "complete", "average")
 THRESHOLDS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
 SOURCES = ("tracker", "groundtruth")
 QUEUE_CHAIN = 3  # strangers in one detected group that make a queue chain
@@ -45,8 +44,8 @@ def strangers_joined(cycle: GroupCycle, groups: TrackedGroups) -> int:
 
 def score(cycles: list[GroupCycle], source: str, model: str, linkage: str, threshold: float) -> dict:
     """The group metrics of one configuration over one run, with the relation curves and the queue check."""
-    stage, metrics = CoherentMotionGroups(model=model, threshold=threshold, linkage=linkage), GroupMetrics(
-        relation_threshold=threshold)
+    stage = CoherentMotionGroups(model=model, threshold=threshold, linkage=linkage)
+    metrics = GroupMetrics(relation_threshold=threshold)
     chains, largest = 0, []
     for c in cycles:
         c = c.from_groundtruth() if source == "groundtruth" else c

@@ -52,7 +52,7 @@ def detect_groups(n: int, i: np.ndarray, j: np.ndarray, strength: np.ndarray, th
     distance = np.ones((len(rows), len(rows)))
     distance[at[i[keep]], at[j[keep]]] = distance[at[j[keep]], at[i[keep]]] = 1.0 - strength[keep]
     labels[rows] = n + agglomerate(distance, 1.0 - threshold, method)
-    return np.unique(labels, return_inverse=True)[1] if n else labels
+    return np.unique(labels, return_inverse=True)[1]
 
 
 def agglomerate(distance: np.ndarray, cut: float, method: str) -> np.ndarray:

@@ -143,19 +143,10 @@ def load_model(model: str | Path) -> PlattSvm | Forest:
     return Forest(**arrays)
 
 
-def model_info(model: str | Path) -> dict:
-    """What a shipped or saved model's header says of how it was made ({} for spencer)."""
-    if model == "spencer":
-        return {}
-    path = MODELS_DIR / MODEL_FILES[model] if model in MODEL_FILES else Path(model)
-    with np.load(path) as data:
-        return json.loads(str(data["header"]))["info"]
-
-
 class RelationEstimator:
     """Every pair of tracks and its strength: the gates, then the classifier on the pairs they pass."""
 
-    def __init__(self, model: str = "svm", max_distance: float = 3.0, max_speed_difference: float = 1.0,
+    def __init__(self, model: str = "spencer", max_distance: float = 3.0, max_speed_difference: float = 1.0,
                  max_heading_difference: float = np.pi / 4, min_speed: float = 0.1):
         self.classifier = load_model(model)
         self.limits = np.array([max_distance, max_speed_difference, max_heading_difference])
