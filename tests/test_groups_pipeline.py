@@ -7,7 +7,7 @@ import pytest
 from pipeline.groups import CoherentMotionGroups
 from pipeline.groups.detection import detect_groups
 from pipeline.groups.relations import (GATED_STRENGTH, SPENCER, LongTermRelations, RelationEstimator, indicators,
-                                       monomial_powers)
+                                       monomial_powers, save_model, tabulate)
 from pipeline.groups.tracking import CompositionTracker
 from pipeline.types import TrackedPersons
 
@@ -54,6 +54,24 @@ def test_spencer_released_model_and_its_gates():
     assert got[(0, 2)] == GATED_STRENGTH and got[(0, 3)] == GATED_STRENGTH  # 3.01 m; 0.8 rad > pi/4
     i, j, s = est.strengths(np.array([[0, 0], [1, 0]], float), np.array([[0.2, 0], [1.21, 0]]))
     assert s[0] == GATED_STRENGTH  # 1.01 m/s apart
+
+
+def test_a_tabulated_classifier_gives_the_value_at_the_nearest_grid_point(tmp_path):
+    # SPENCER's model on a grid of 0.5 m, 0.5 m/s and pi/8 rad up to its gates: 7 x 3 x 3 points
+    table = tabulate(SPENCER, np.array([3.0, 1.0, np.pi / 4]), np.array([0.5, 0.5, np.pi / 8]))
+    assert table.values.shape == (7, 3, 3)
+    np.testing.assert_allclose(table.upper, [3.0, 1.0, np.pi / 4])
+    # (1.2, 0.3, 0.1) is nearest (1.0, 0.5, 0.0); (2.9, 0.74, 0.7) nearest (3.0, 0.5, pi/4)
+    x = np.array([[1.2, 0.3, 0.1], [2.9, 0.74, 0.7]])
+    nodes = np.array([[1.0, 0.5, 0.0], [3.0, 0.5, np.pi / 4]])
+    np.testing.assert_allclose(table.predict_proba(x), SPENCER.predict_proba(nodes), rtol=1e-6)
+    # the estimator applies it to the pairs inside the gates, and refuses gates wider than the table
+    path = tmp_path / "table.npz"
+    save_model(path, table, {"test": True})
+    i, j, s = RelationEstimator(str(path)).strengths(np.array([[0, 0], [1.2, 0]]), np.array([[1.0, 0], [1.3, 0]]))
+    assert s[0] == pytest.approx(SPENCER.predict_proba(np.array([[1.0, 0.5, 0.0]]))[0], rel=1e-6)
+    with pytest.raises(ValueError, match=r"tabulated up to the gates \[3.0, 1.0, 0.7854\]"):
+        RelationEstimator(str(path), max_distance=4.0)
 
 
 def test_monomials_of_degree_three_are_the_19_products():
@@ -192,17 +210,18 @@ def test_a_passport_queue_of_strangers_is_one_group_only_with_single_linkage(mod
 
 
 @pytest.mark.parametrize("method", ["complete", "average"])
-def test_agglomerate_cuts_as_scipys_linkage_and_fcluster(method):
+def test_detection_cuts_as_scipys_fcluster_of_the_whole_tree(method):
+    # detect_groups clusters only the tracks with a pair at the threshold and cuts the tree itself (cut_tree): the
+    # partition must be scipy's fcluster of the tree of all tracks, pairs left out of the relations at strength 0
     from scipy.cluster.hierarchy import fcluster, linkage
-    from scipy.spatial.distance import squareform
-
-    from pipeline.groups.detection import agglomerate
 
     rng = np.random.default_rng(2)
-    for _ in range(100):
-        k = int(rng.integers(2, 14))
-        d = rng.uniform(0, 1, (k, k))
-        d = np.triu(d, 1) + np.triu(d, 1).T
-        ours = agglomerate(d, 0.5, method)
-        theirs = fcluster(linkage(squareform(d), method=method), 0.5, criterion="distance")
+    for _ in range(200):
+        k = int(rng.integers(2, 16))
+        i, j = np.triu_indices(k, 1)
+        strength = rng.uniform(0, 0.8, len(i))
+        given = rng.random(len(i)) < 0.6
+        ours = detect_groups(k, i[given], j[given], strength[given], 0.5, method)
+        theirs = fcluster(linkage(1.0 - np.where(given, strength, 0.0), method=method), 0.5, criterion="distance")
         assert (ours[:, None] == ours[None]).tolist() == (theirs[:, None] == theirs[None]).tolist()
+        assert sorted(set(ours.tolist())) == list(range(len(set(ours.tolist()))))

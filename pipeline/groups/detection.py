@@ -2,14 +2,17 @@
 
 ``single`` is SPENCER's (``tracked_groups.py``: single-linkage clustering of 1 - strength cut at 0.5, i.e. the
 connected components of the pairs at or above the threshold; the ROS book chapter Sec. 5.2). It chains: a queue of
-strangers, each near the next, becomes one group. ``complete`` and ``average`` cluster each connected component
-again by complete or average linkage (``agglomerate``), so a group needs every pair (complete) or its pairs on average
-(average) at the threshold; a pair missing from the relations has strength 0 there, as in SPENCER.
+strangers, each near the next, becomes one group. ``complete`` and ``average`` cut the tree of complete or average
+linkage (scipy's ``linkage``, cut by ``cut_tree``) at the same height, so a group needs every pair (complete) or its
+pairs on average (average) at the threshold; a pair missing from the relations has strength 0 there, as in SPENCER.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.cluster.hierarchy import linkage
+
+from .relations import pairs
 
 LINKAGES = ("single", "complete", "average")
 
@@ -34,55 +37,35 @@ def components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def detect_groups(n: int, i: np.ndarray, j: np.ndarray, strength: np.ndarray, threshold: float = 0.5,
                   method: str = "single") -> np.ndarray:
     """A cluster label per track (rows 0..n-1; labels 0..k-1, singletons included) from the relations (i, j,
-    strength) between rows i and j."""
+    strength) between rows i < j."""
     link = strength >= threshold
-    labels = components(n, i[link], j[link])
     if method == "single":
-        return labels
-    sizes = np.bincount(labels) if n else np.zeros(0, np.int64)
-    big = np.flatnonzero(sizes >= 3)
-    if not len(big):
-        return labels
-    # the rows of every component of three or more, clustered together: a pair of two components is below the
-    # threshold, so no linkage joins them
-    rows = np.flatnonzero(np.isin(labels, big))
-    at = np.full(n, -1)
-    at[rows] = np.arange(len(rows))
-    keep = (at[i] >= 0) & (at[j] >= 0)
-    distance = np.ones((len(rows), len(rows)))
-    distance[at[i[keep]], at[j[keep]]] = distance[at[j[keep]], at[i[keep]]] = 1.0 - strength[keep]
-    labels[rows] = n + agglomerate(distance, 1.0 - threshold, method)
+        return components(n, i[link], j[link])
+    # the rows with any pair at the threshold, clustered together: that is the tree of each connected component
+    # cut at the same height, as two clusters of two components are farther apart than the cut whatever the linkage
+    linked = np.zeros(n, bool)
+    linked[i[link]] = linked[j[link]] = True
+    rows = np.flatnonzero(linked)
+    labels = np.arange(n) + n
+    if len(rows):
+        related = np.zeros((n, n))
+        related[i, j] = strength
+        p, q = pairs(len(rows))
+        labels[rows] = cut_tree(linkage(1.0 - related[rows[p], rows[q]], method), 1.0 - threshold)
     return np.unique(labels, return_inverse=True)[1]
 
 
-def agglomerate(distance: np.ndarray, cut: float, method: str) -> np.ndarray:
-    """Agglomerative clustering of a small distance matrix by complete or average linkage (UPGMA), stopped where
-    the closest two clusters are farther than ``cut``: a part per row, 0..k-1. Each step merges every pair of
-    clusters that are each other's nearest within ``cut`` at once: both linkages are reducible (a merge never brings
-    a third cluster nearer), so the tree is the one merging a pair at a time builds (the nearest-neighbour chain's
-    argument, Murtagh 1983), in a few steps instead of one per merge; and both never merge at a smaller distance
-    than before, so stopping at ``cut`` is scipy's ``fcluster(..., criterion="distance")`` of the whole tree."""
-    d = distance.astype(float).copy()
-    np.fill_diagonal(d, np.inf)  # a merged-away cluster's row and column become inf too
-    k = len(d)
-    part, size, rows = np.arange(k), np.ones(k), np.arange(k)
-    while True:
-        nearest = np.argmin(d, axis=1)
-        a = np.flatnonzero((nearest[nearest] == rows) & (rows < nearest) & (d[rows, nearest] <= cut))
-        if not len(a):
-            break
-        b = nearest[a]
-        # rows, then columns: for disjoint pairs this is the linkage over the four blocks
-        if method == "complete":
-            d[a] = np.maximum(d[a], d[b])
-            d[:, a] = np.maximum(d[:, a], d[:, b])
-        else:
-            w = (size[a] / (size[a] + size[b]))[:, None]
-            d[a] = w * d[a] + (1 - w) * d[b]
-            d[:, a] = w.T * d[:, a] + (1 - w.T) * d[:, b]
-        d[b], d[:, b], d[a, a] = np.inf, np.inf, np.inf
-        size[a] += size[b]
-        relabel = np.arange(k)
-        relabel[b] = a
-        part = relabel[part]
-    return np.unique(part, return_inverse=True)[1]
+def cut_tree(merges: np.ndarray, cut: float) -> list[int]:
+    """The flat clusters (a part per leaf) of a linkage tree (scipy's ``linkage`` rows: a, b, distance, size) whose
+    merges are at most ``cut`` apart: scipy's ``fcluster(..., criterion="distance")`` for the linkages whose merge
+    distances never decrease (complete, average), without its checks, which cost three times the linkage itself at
+    a crowd's size."""
+    k = len(merges) + 1
+    clusters = {leaf: [leaf] for leaf in range(k)}
+    for node, (a, b) in enumerate(merges[merges[:, 2] <= cut, :2].astype(np.int64).tolist(), start=k):
+        clusters[node] = clusters.pop(a) + clusters.pop(b)
+    part = [0] * k
+    for label, leaves in enumerate(clusters.values()):
+        for leaf in leaves:
+            part[leaf] = label
+    return part

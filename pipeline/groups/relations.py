@@ -11,7 +11,7 @@ probability that the two walk together.
 Classifiers (``load_model``): ``spencer``, the released default of SPENCER, a linear nu-SVC on the raw indicators
 with libsvm's Platt sigmoid; ``svm``, ours, a linear SVM on the cubic monomials of the standardised indicators (the
 function class of a cubic polynomial kernel) with a Platt sigmoid fitted on held-out seeds; ``forest``, ours, a
-random forest whose leaves hold the share of related pairs. Ours are trained on pairs of tracker output labelled by
+random forest whose leaves hold the share of related pairs, shipped tabulated (``RelationTable``). Ours are trained on pairs of tracker output labelled by
 the true groups of the persons the tracks matched (``crowdsim experiment train-relations``), so they learn the
 tracker's noise; they ship in ``models/`` as plain arrays.
 
@@ -27,8 +27,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-
-from pipeline.detectors.learned_segments import Forest
 
 MODELS_DIR = Path(__file__).parent / "models"
 MODEL_FILES = {"svm": "relations_svm.npz", "forest": "relations_forest.npz"}
@@ -52,12 +50,18 @@ def indicators(position: np.ndarray, velocity: np.ndarray, min_speed: float = 0.
     ``min_speed`` heads at 0 rad)."""
     if i is None:
         i, j = pairs(len(position))
+    distance = np.hypot(position[i, 0] - position[j, 0], position[i, 1] - position[j, 1])
+    return i, j, np.column_stack([distance, *motion_differences(velocity, min_speed, i, j)])
+
+
+def motion_differences(velocity: np.ndarray, min_speed: float, i: np.ndarray,
+                       j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The speed and heading differences of the pairs of rows (i, j), as ``indicators`` defines them."""
     speed = np.hypot(velocity[:, 0], velocity[:, 1])
     heading = np.where(speed >= min_speed, np.arctan2(velocity[:, 1], velocity[:, 0]), 0.0)
     turn = np.abs(heading[i] - heading[j])
-    turn = np.where(turn > np.pi, 2 * np.pi - turn, turn)  # both in [-pi, pi]: the difference wraps once at most
-    distance = np.hypot(position[i, 0] - position[j, 0], position[i, 1] - position[j, 1])
-    return i, j, np.column_stack([distance, np.abs(speed[i] - speed[j]), turn])
+    # both in [-pi, pi]: the difference wraps once at most
+    return np.abs(speed[i] - speed[j]), np.minimum(turn, 2 * np.pi - turn)
 
 
 def monomials(z: np.ndarray, powers: np.ndarray) -> np.ndarray:
@@ -116,15 +120,58 @@ SPENCER = PlattSvm(mean=np.zeros(3), scale=np.ones(3), powers=np.eye(3, dtype=np
                    intercept=3.03765, platt_a=-1.55322, platt_b=-0.0123641)
 
 
-def save_model(path: Path, classifier: PlattSvm | Forest, info: dict) -> None:
+@dataclass(frozen=True)
+class RelationTable:
+    """A classifier tabulated on a regular grid over the gates' box (``tabulate``): P(related) at the grid point
+    nearest each row. A few array operations whatever the classifier: a random forest's own walk takes a numpy step
+    per level of its trees, ten times the cost at a crowd's size."""
+
+    lower: np.ndarray  # the indicators at grid point (0, 0, 0)
+    step: np.ndarray  # the grid's spacing in each indicator
+    values: np.ndarray  # [distance, speed difference, heading difference] P(related)
+
+    @property
+    def upper(self) -> np.ndarray:
+        return self.lower + self.step * (np.array(self.values.shape) - 1)
+
+    def predict_proba(self, x: np.ndarray) -> np.ndarray:
+        k = np.rint((x - self.lower) / self.step).astype(np.int64)
+        k = np.minimum(np.maximum(k, 0), self._last)  # np.clip costs as much as the rest
+        return self._flat[k @ self._strides].astype(float)
+
+    @functools.cached_property
+    def _last(self) -> np.ndarray:
+        return np.array(self.values.shape) - 1
+
+    @functools.cached_property
+    def _flat(self) -> np.ndarray:
+        return np.ascontiguousarray(self.values).ravel()
+
+    @functools.cached_property
+    def _strides(self) -> np.ndarray:
+        """The flat index's step per grid step of each indicator."""
+        return np.cumprod((self.values.shape[1:] + (1,))[::-1])[::-1]
+
+
+def tabulate(classifier, upper: np.ndarray, step: np.ndarray) -> RelationTable:
+    """``classifier``'s P(related) at every point of the grid of spacing ``step`` from 0 to ``upper`` (each a whole
+    number of steps), as float32."""
+    counts = np.rint(np.asarray(upper) / step).astype(int) + 1
+    axes = [np.arange(c) * h for c, h in zip(counts, step)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(counts))
+    values = classifier.predict_proba(grid).astype(np.float32).reshape(counts)
+    return RelationTable(np.zeros(len(counts)), np.asarray(step, float), values)
+
+
+def save_model(path: Path, classifier: PlattSvm | RelationTable, info: dict) -> None:
     """A trained classifier as an .npz of plain arrays and a JSON header (no pickle)."""
-    kind = "svm" if isinstance(classifier, PlattSvm) else "forest"
+    kind = "svm" if isinstance(classifier, PlattSvm) else "table"
     arrays = {name: np.asarray(getattr(classifier, name)) for name in classifier.__dataclass_fields__}
     header = {"format": MODEL_FORMAT, "kind": kind, "indicators": list(INDICATORS), "info": info}
-    np.savez(path, header=np.array(json.dumps(header)), **arrays)
+    np.savez_compressed(path, header=np.array(json.dumps(header)), **arrays)
 
 
-def load_model(model: str | Path) -> PlattSvm | Forest:
+def load_model(model: str | Path) -> PlattSvm | RelationTable:
     """``spencer``, a shipped model by name (``svm``, ``forest``), or the path of one ``save_model`` wrote."""
     if model == "spencer":
         return SPENCER
@@ -140,7 +187,7 @@ def load_model(model: str | Path) -> PlattSvm | Forest:
         raise ValueError(f"model: {path} has format {header.get('format')!r}; expected {MODEL_FORMAT}")
     if header["kind"] == "svm":
         return PlattSvm(**{k: (float(v) if v.ndim == 0 else v) for k, v in arrays.items()})
-    return Forest(**arrays)
+    return RelationTable(**arrays)
 
 
 class RelationEstimator:
@@ -150,19 +197,28 @@ class RelationEstimator:
                  max_heading_difference: float = np.pi / 4, min_speed: float = 0.1):
         self.classifier = load_model(model)
         self.limits = np.array([max_distance, max_speed_difference, max_heading_difference])
+        if isinstance(self.classifier, RelationTable) and (self.limits > self.classifier.upper + 1e-9).any():
+            raise ValueError(f"model: {model} is tabulated up to the gates {self.classifier.upper.round(4).tolist()} "
+                             f"({', '.join(INDICATORS)}); expected gates within them, not "
+                             f"{self.limits.round(4).tolist()}")
         self.min_speed = min_speed
 
     def strengths(self, position: np.ndarray, velocity: np.ndarray):
         """(i, j, strength) of every pair i < j of tracks by row; the indicators only of the pairs within the
-        distance gate (a crowd's pairs are most of them farther)."""
+        distance gate (a crowd's pairs are most of them farther), each gate applied before the indicators are
+        put together."""
         i, j = pairs(len(position))
-        x, y = position[:, 0], position[:, 1]
-        near = np.flatnonzero((x[i] - x[j]) ** 2 + (y[i] - y[j]) ** 2 <= (self.limits[0] + 1e-9) ** 2)
-        _, _, features = indicators(position, velocity, self.min_speed, i[near], j[near])
-        passes = (features <= self.limits).all(axis=1)
+        xy = np.ascontiguousarray(position, float).view(np.complex128).ravel()  # x + iy: one gather per pair end
+        d = xy[i] - xy[j]
+        near = np.flatnonzero(d.real * d.real + d.imag * d.imag <= (self.limits[0] + 1e-9) ** 2)
+        distance = np.hypot(d.real[near], d.imag[near])
+        speed_difference, turn = motion_differences(velocity, self.min_speed, i[near], j[near])
+        passes = np.flatnonzero((distance <= self.limits[0]) & (speed_difference <= self.limits[1])
+                                & (turn <= self.limits[2]))
         strength = np.full(len(i), GATED_STRENGTH)
-        if passes.any():
-            strength[near[passes]] = self.classifier.predict_proba(features[passes])
+        if len(passes):
+            features = np.column_stack([distance[passes], speed_difference[passes], turn[passes]])
+            strength[near[passes]] = self.classifier.predict_proba(features)
         return i, j, strength
 
 

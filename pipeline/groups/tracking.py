@@ -18,6 +18,8 @@ import numpy as np
 
 from pipeline.types import TrackedGroups
 
+NONE = frozenset()  # the entries of a track in none
+
 
 class CompositionTracker:
     def __init__(self, memory: int = 300):
@@ -58,19 +60,22 @@ class CompositionTracker:
 
     def _match(self, members: frozenset, used: set[int]) -> int | None:
         """The id of the largest (then oldest, then first remembered) subset or superset of ``members`` not used this
-        cycle: of the entries holding any member, those holding all of them (supersets) and those all of whose
-        members are among them (subsets), counted per entry."""
-        hits = Counter()
-        for t in members:
-            hits.update(self.by_track.get(t, ()))
+        cycle. The entries holding all members are the supersets; for a pair, the only subset (the memory holds no
+        single persons) is itself, among them. A larger cluster also counts, for each entry holding any member, how
+        many it holds: all of its own, a subset."""
+        held_by = [self.by_track.get(t, NONE) for t in members]
+        if len(members) == 2:
+            candidates = held_by[0] & held_by[1]
+        else:
+            hits = Counter()
+            for entries in held_by:
+                hits.update(entries)
+            candidates = [e for e, k in hits.items() if k == len(members) or k == len(self.memory[e][0])]
         best, best_key = None, None
-        for entry, k in hits.items():
+        for entry in candidates:
             held, group_id, since = self.memory[entry]
-            size = len(held)
-            if group_id in used or (k != len(members) and k != size):
-                continue
-            key = (size, -since, -entry)
-            if best_key is None or key > best_key:
+            key = (len(held), -since, -entry)
+            if group_id not in used and (best_key is None or key > best_key):
                 best, best_key = group_id, key
         return best
 
