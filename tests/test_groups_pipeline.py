@@ -57,8 +57,8 @@ def test_spencer_released_model_and_its_gates():
 
 
 def test_a_tabulated_classifier_gives_the_value_at_the_nearest_grid_point(tmp_path):
-    # SPENCER's model on a grid of 0.5 m, 0.5 m/s and pi/8 rad up to its gates: 7 x 3 x 3 points
-    table = tabulate(SPENCER, np.array([3.0, 1.0, np.pi / 4]), np.array([0.5, 0.5, np.pi / 8]))
+    # SPENCER's model on a grid of 0.5 m, 0.5 m/s and pi/8 rad up to its gates (7 x 3 x 3 points), one sample a cell
+    table = tabulate(SPENCER, np.array([3.0, 1.0, np.pi / 4]), np.array([0.5, 0.5, np.pi / 8]), samples=1)
     assert table.values.shape == (7, 3, 3)
     np.testing.assert_allclose(table.upper, [3.0, 1.0, np.pi / 4])
     # (1.2, 0.3, 0.1) is nearest (1.0, 0.5, 0.0); (2.9, 0.74, 0.7) nearest (3.0, 0.5, pi/4)
@@ -72,6 +72,18 @@ def test_a_tabulated_classifier_gives_the_value_at_the_nearest_grid_point(tmp_pa
     assert s[0] == pytest.approx(SPENCER.predict_proba(np.array([[1.0, 0.5, 0.0]]))[0], rel=1e-6)
     with pytest.raises(ValueError, match=r"tabulated up to the gates \[3.0, 1.0, 0.7854\]"):
         RelationEstimator(str(path), max_distance=4.0)
+
+
+def test_a_table_holds_each_cells_mean():
+    # P = d^2 / 9 over a cell of 0.3 m, sampled at d + (-1/3, 0, 1/3) 0.3 m: the mean is (d^2 + 2 (0.1)^2 / 3) / 9
+    class Square:
+        @staticmethod
+        def predict_proba(x):
+            return x[:, 0] ** 2 / 9
+
+    table = tabulate(Square, np.array([3.0, 1.0, 0.5]), np.array([0.3, 0.5, 0.5]))
+    d = 0.3 * np.arange(11)
+    np.testing.assert_allclose(table.values[:, 1, 0], (d ** 2 + 2 * 0.01 / 3) / 9, rtol=1e-6)
 
 
 def test_monomials_of_degree_three_are_the_19_products():

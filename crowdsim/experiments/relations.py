@@ -35,6 +35,7 @@ FOREST = {"n_estimators": 30, "max_depth": 8, "min_samples_leaf": 20}
 GATES = np.array([3.0, 1.0, np.pi / 4])  # SPENCER's; only pairs inside reach a classifier
 # the forest's grid: 2 cm, 2 cm/s and 1 degree, finer than a track's noise (0.1 m/s in speed); 354,246 points
 TABLE_STEP = np.array([0.02, 0.02, np.pi / 180])
+TABLE_SAMPLES = 3  # per indicator: each grid value is the forest's mean over 27 points of its cell
 
 
 @dataclass(frozen=True)
@@ -129,13 +130,13 @@ def train_svm(x: np.ndarray, y: np.ndarray, x_cal: np.ndarray, y_cal: np.ndarray
 
 
 def train_forest(x: np.ndarray, y: np.ndarray) -> RelationTable:
-    """A random forest, tabulated over the gates' box on ``TABLE_STEP``'s grid."""
+    """A random forest, tabulated over the gates' box on ``TABLE_STEP``'s grid, each cell's mean."""
     from sklearn.ensemble import RandomForestClassifier
 
     from .train_detector import forest_from_sklearn
 
     forest = forest_from_sklearn(RandomForestClassifier(**FOREST, random_state=0).fit(x.astype(np.float32), y))
-    return tabulate(forest, GATES, TABLE_STEP)
+    return tabulate(forest, GATES, TABLE_STEP, TABLE_SAMPLES)
 
 
 def train(n_seeds: int = 20, duration: float = DURATION, workers: int = 2, progress: bool = True):
@@ -158,7 +159,8 @@ def fit(train_runs: list[list[GroupCycle]], calibration_runs: list[list[GroupCyc
             "every": EVERY, "pairs": int(len(y)), "related": int(y.sum()), "indicators": list(INDICATORS),
             "scikit_learn": sklearn.__version__}
     return {"svm": (train_svm(x, y, x_cal, y_cal), {**info, "estimator": {"C": SVM_C, "degree": DEGREE}}),
-            "forest": (train_forest(x, y), {**info, "estimator": FOREST, "table_step": TABLE_STEP.tolist()})}
+            "forest": (train_forest(x, y), {**info, "estimator": FOREST, "table_step": TABLE_STEP.tolist(),
+                                            "table_samples": TABLE_SAMPLES})}
 
 
 def save_models(models: dict, out: Path = MODELS_DIR) -> list[Path]:
