@@ -15,6 +15,7 @@ from scenarios.schema import ScenarioError, import_class
 
 from .detectors.laser_segments import SegmentDetector
 from .detectors.learned_segments import LearnedSegmentDetector
+from .detectors.legs import LegDetector
 from .fusion import NearestFusion
 from .groups import CoherentMotionGroups
 from .map_filter import MapFilter
@@ -58,7 +59,8 @@ class GroupStage(Protocol):
     def reset(self) -> None: ...
 
 
-DETECTORS: dict[str, type] = {"laser_segments": SegmentDetector, "laser_learned": LearnedSegmentDetector}
+DETECTORS: dict[str, type] = {"laser_segments": SegmentDetector, "laser_learned": LearnedSegmentDetector,
+                              "laser_legs": LegDetector}
 FUSIONS: dict[str, type] = {"nearest": NearestFusion}
 TRACKERS: dict[str, type] = {"nnt": NearestNeighbourTracker, "mht": MultiHypothesisTracker}
 GROUP_STAGES: dict[str, type] = {"coherent_motion": CoherentMotionGroups}

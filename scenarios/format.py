@@ -346,9 +346,29 @@ LEARNED_DETECTOR = Schema({
                            doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)"),
 })
 
-DETECTOR_TYPES = {"laser_segments": SEGMENT_DETECTOR, "laser_learned": LEARNED_DETECTOR}
+# seed 001 Sec. 4.1 gives the steps and Xavier et al. 2005's properties but no threshold: ours are chosen on this
+# testbed's legs (pipeline/detectors/legs.py says how)
+LEG_DETECTOR = Schema({
+    "jump_distance": F("float", 0.08, min=0.0, exclusive_min=True, doc="m, consecutive returns farther apart start a "
+                                                                      "new blob"),
+    "min_points": F("int", 3, min=3, doc="returns of a leg (an inscribed angle needs an interior one)"),
+    "min_width": F("float", 0.05, min=0.0, exclusive_min=True, doc="m, narrowest leg (first to last return)"),
+    "max_width": F("float", 0.15, min=0.0, exclusive_min=True, doc="m, widest leg"),
+    "min_angle_deg": F("float", 90.0, min=0.0, max=180.0, doc="deg, least mean inscribed angle (a half circle's)"),
+    "max_angle_deg": F("float", 160.0, min=0.0, max=180.0, doc="deg, largest mean inscribed angle (flatter is a wall)"),
+    "max_angle_sd_deg": F("float", 30.0, min=0.0, doc="deg, largest spread of the inscribed angles (a circle's: 0)"),
+    "sharp_angle_deg": F("float", 60.0, min=0.0, max=180.0,
+                         doc="deg, a blob with a sharper inscribed angle is a sharp structure, no leg"),
+    "pair_distance": F("float", 0.5, min=0.0, doc="m, farthest two legs of one person"),
+    "single_legs": F("bool", True, doc="a leg without a partner is a person too (the other hidden behind it)"),
+    "blob_min_radius": F("float", 0.03, min=0.0, doc="m, least half-width of a raw blob (thinner: a table leg)"),
+    "blob_max_radius": F("float", 0.3, min=0.0, doc="m, largest half-width of a raw blob (wider: a wall)"),
+    "position_variance": F("float", 0.05, min=0.0, exclusive_min=True, doc="m^2, of each person's position"),
+})
+
+DETECTOR_TYPES = {"laser_segments": SEGMENT_DETECTOR, "laser_learned": LEARNED_DETECTOR, "laser_legs": LEG_DETECTOR}
 # the `sensors` list whose frames each built-in detector reads
-DETECTOR_READS = {"laser_segments": "lasers", "laser_learned": "lasers"}
+DETECTOR_READS = {"laser_segments": "lasers", "laser_learned": "lasers", "laser_legs": "lasers"}
 
 NEAREST_FUSION = Schema({
     "distance": F("float", 0.4, min=0.0, doc="m, detections of two sensors nearer than this are one person"),
