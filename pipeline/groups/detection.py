@@ -46,13 +46,16 @@ def detect_groups(n: int, i: np.ndarray, j: np.ndarray, strength: np.ndarray, th
     linked = np.zeros(n, bool)
     linked[i[link]] = linked[j[link]] = True
     rows = np.flatnonzero(linked)
-    labels = np.arange(n) + n
+    labels = np.empty(n, np.int64)
+    parts = 0
     if len(rows):
-        related = np.zeros((n, n))
-        related[i, j] = strength
+        related = np.zeros(n * n)  # row-major [n, n], filled above the diagonal; flat indices cost a third of pairs
+        related[i * n + j] = strength
         p, q = pairs(len(rows))
-        labels[rows] = cut_tree(linkage(1.0 - related[rows[p], rows[q]], method), 1.0 - threshold)
-    return np.unique(labels, return_inverse=True)[1]
+        labels[rows] = cut_tree(linkage(1.0 - related[rows[p] * n + rows[q]], method), 1.0 - threshold)
+        parts = labels[rows].max() + 1
+    labels[~linked] = parts + np.arange(n - len(rows))  # the rest alone
+    return labels
 
 
 def cut_tree(merges: np.ndarray, cut: float) -> list[int]:
