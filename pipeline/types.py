@@ -160,6 +160,19 @@ class DetectedPersons:
     def empty(cls, stamp: float, frame: str, modality: str) -> "DetectedPersons":
         return cls(stamp, frame, modality, np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0))
 
+    @classmethod
+    def on_floor(cls, stamp: float, frame: str, modality: str, first_id: int, xy: np.ndarray, variance: float,
+                 confidence: np.ndarray | None = None) -> "DetectedPersons":
+        """Detections at points [n, 2] of a plane scan (height unknown), ``variance`` in x and y, ids from
+        ``first_id`` on, confidence 1 unless given."""
+        n = len(xy)
+        cov = np.zeros((n, 3, 3))
+        cov[:, 0, 0] = cov[:, 1, 1] = variance
+        cov[:, 2, 2] = UNKNOWN_VARIANCE
+        return cls(stamp, frame, modality, np.arange(first_id, first_id + n, dtype=np.int64),
+                   np.concatenate([xy, np.zeros((n, 1))], axis=1), cov,
+                   np.ones(n) if confidence is None else np.asarray(confidence, float))
+
 
 @dataclass
 class TrackedPersons:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.types import UNKNOWN_VARIANCE, DetectedPersons, LaserScan
+from pipeline.types import DetectedPersons, LaserScan
 
 from .segment_features import jump_segments
 
@@ -56,11 +56,7 @@ class SegmentDetector:
         # the visible arc's centroid lies pi/4 r in front of a round body's centre (r = width / 2)
         ray = c / np.maximum(np.linalg.norm(c, axis=1), 1e-9)[:, None]
         centre = c + ray * (np.pi / 8) * w[:, None]
-        n = len(centre)
-        cov = np.zeros((n, 3, 3))
-        cov[:, 0, 0] = cov[:, 1, 1] = self.position_variance
-        cov[:, 2, 2] = UNKNOWN_VARIANCE
-        ids = np.arange(self._next_id, self._next_id + n, dtype=np.int64)
-        self._next_id += n
-        position = np.concatenate([centre, np.zeros((n, 1))], axis=1)
-        return DetectedPersons(scan.stamp, scan.frame, "laser2d", ids, position, cov, np.ones(n))
+        out = DetectedPersons.on_floor(scan.stamp, scan.frame, "laser2d", self._next_id, centre,
+                                       self.position_variance)
+        self._next_id += len(centre)
+        return out

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.types import UNKNOWN_VARIANCE, DetectedPersons, LaserScan
+from pipeline.types import DetectedPersons, LaserScan
 
 from .segment_features import FEATURE_NAMES, Segments, jump_segments, segment_features
 
@@ -190,11 +190,7 @@ class LearnedSegmentDetector:
     def detect(self, scan: LaserScan) -> DetectedPersons:
         centre, p = self.score(scan)
         keep = p >= self.threshold
-        n = int(keep.sum())
-        cov = np.zeros((n, 3, 3))
-        cov[:, 0, 0] = cov[:, 1, 1] = self.position_variance
-        cov[:, 2, 2] = UNKNOWN_VARIANCE
-        ids = np.arange(self._next_id, self._next_id + n, dtype=np.int64)
-        self._next_id += n
-        position = np.concatenate([centre[keep], np.zeros((n, 1))], axis=1)
-        return DetectedPersons(scan.stamp, scan.frame, "laser2d", ids, position, cov, p[keep])
+        out = DetectedPersons.on_floor(scan.stamp, scan.frame, "laser2d", self._next_id, centre[keep],
+                                       self.position_variance, p[keep])
+        self._next_id += len(out.detection_id)
+        return out

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.types import UNKNOWN_VARIANCE, DetectedPersons, LaserScan
+from pipeline.types import DetectedPersons, LaserScan
 
 from .segment_features import Segments, jump_segments
 
@@ -86,14 +86,9 @@ class LegDetector:
         return self._persons(scan, seg.centroid[keep], "laser_blobs")
 
     def _persons(self, scan: LaserScan, xy: np.ndarray, modality: str) -> DetectedPersons:
-        n = len(xy)
-        cov = np.zeros((n, 3, 3))
-        cov[:, 0, 0] = cov[:, 1, 1] = self.position_variance
-        cov[:, 2, 2] = UNKNOWN_VARIANCE
-        ids = np.arange(self._next_id, self._next_id + n, dtype=np.int64)
-        self._next_id += n
-        position = np.concatenate([xy, np.zeros((n, 1))], axis=1)
-        return DetectedPersons(scan.stamp, scan.frame, modality, ids, position, cov, np.ones(n))
+        out = DetectedPersons.on_floor(scan.stamp, scan.frame, modality, self._next_id, xy, self.position_variance)
+        self._next_id += len(xy)
+        return out
 
 
 def inscribed_angles(seg: Segments) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
