@@ -391,6 +391,7 @@ class Simulation:
             camera = self.wall_cameras[k]
             self._next_wall[k] += camera.period
             image = camera.capture(stamp)
+            image.pose = self._camera_in_odom(image.frame)
             self._detect(image)
             self._pending_camera.append(image)
             self._latest_seen[image.frame] = (stamp, agents.id, _on(agents.id, image.ids, image.visible_fraction),

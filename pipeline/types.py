@@ -79,6 +79,9 @@ class CameraFrame:
     ``person_id`` [h, w] is the segmentation (-1 for none; simulation-only). Per visible person (rows of ``ids``):
     ``boxes`` [n, 4] (u0, v0, u1, v1) around the visible pixels, ``full_boxes`` [n, 4] around the person as it
     would show unoccluded, ``visible_fraction`` [n] of its unoccluded pixels that show.
+
+    The calibration, what a camera detector may use: ``camera_matrix`` (3x3 K) and ``pose``, the optical frame in the
+    tracking frame (4x4) as the robot's localisation places the fixed camera (the loop fills it in).
     """
 
     stamp: float
@@ -89,6 +92,8 @@ class CameraFrame:
     boxes: np.ndarray
     full_boxes: np.ndarray
     visible_fraction: np.ndarray
+    camera_matrix: np.ndarray | None = None
+    pose: np.ndarray | None = None
 
 
 @dataclass

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from pipeline.camera_geometry import floor_homography, image_to_floor
 from pipeline.types import CameraFrame, DepthFrame
 
 from . import body, bodycast
@@ -339,24 +340,26 @@ class WallCamera:
     def backend(self) -> str:
         return self.renderer.backend
 
+    @property
+    def camera_matrix(self) -> np.ndarray:
+        k = self.intrinsics
+        return np.array([[k.f, 0.0, k.centre[0]], [0.0, k.f, k.centre[1]], [0.0, 0.0, 1.0]])
+
+    def world_pose(self) -> np.ndarray:
+        """The optical frame in the world, a 4x4 transform."""
+        origin, rot = camera_pose(self.scene, self.name)
+        pose = np.eye(4)
+        pose[:3, :3], pose[:3, 3] = rot, origin
+        return pose
+
     def ground_homography(self) -> np.ndarray:
         """The 3x3 calibration that maps floor points (x, y, 1) in the world to image points (u, v, 1) up to scale
-        (continuous pixel coordinates, pixel u covering [u, u + 1)); its inverse maps the image to the floor, as a
-        wall-camera tracker projects a person's feet onto the ground plane (seed 001)."""
-        origin, rot = camera_pose(self.scene, self.name)
-        k = self.intrinsics
-        K = np.array([[k.f, 0.0, k.centre[0]], [0.0, k.f, k.centre[1]], [0.0, 0.0, 1.0]])
-        # a floor point p = (x, y, 0) sits at rot^T (p - origin) in the optical frame
-        return K @ np.column_stack([rot.T[:, 0], rot.T[:, 1], -rot.T @ origin])
+        (``pipeline.camera_geometry``)."""
+        return floor_homography(self.camera_matrix, self.world_pose())
 
     def image_to_ground(self, uv: np.ndarray) -> np.ndarray:
-        """Floor points [n, 2] seen at image points ``uv`` [n, 2] (NaN for points above the horizon)."""
-        g = np.column_stack([uv, np.ones(len(uv))]) @ np.linalg.inv(self.ground_homography()).T
-        with np.errstate(divide="ignore", invalid="ignore"):
-            xy = g[:, :2] / g[:, 2:]
-        origin, rot = camera_pose(self.scene, self.name)
-        ahead = ((np.column_stack([xy, np.zeros(len(xy))]) - origin) @ rot)[:, 2] > 0
-        return np.where(ahead[:, None], xy, np.nan)
+        """Floor points [n, 2] in the world seen at image points ``uv`` [n, 2] (NaN above the horizon)."""
+        return image_to_floor(self.camera_matrix, self.world_pose(), uv)
 
     def capture(self, stamp: float) -> CameraFrame:
         s, k = self.scene, self.intrinsics
@@ -392,7 +395,7 @@ class WallCamera:
         full_boxes = _boxes_of(remap[owner[keep]], u[keep], v[keep], len(ids))[order]
         fraction = np.minimum(seen[ids] / np.maximum(full[ids], 1), 1.0)[order]
         return CameraFrame(stamp, self.name, rgb, seg.reshape(k.height, k.width), s.slot_person_id[slots[ids]][order],
-                           boxes, full_boxes, fraction)
+                           boxes, full_boxes, fraction, self.camera_matrix)
 
 
 def person_pixels(scene: Scene, camera: str, intrinsics: Intrinsics, slots: np.ndarray):

@@ -209,6 +209,12 @@ def test_a_detector_on_a_camera_reads_its_images_and_its_detections_reach_odom()
                 f.detections.originals]
         assert len(seen) == images  # each image's detection reaches the next tracking cycle
         np.testing.assert_allclose(np.concatenate(seen), [expected[name]] * images, atol=1e-7)
+    # a wall camera's images carry its calibration: K (f = 24 / tan(22.5 deg) for 48 rows at 45 degrees) and the
+    # optical frame in odom, which puts 5 m along the axis where the detections went
+    for image in sim.pipeline.detectors["corner_cam"].frames:
+        np.testing.assert_allclose(image.camera_matrix, [[24 / np.tan(np.radians(22.5)), 0, 32],
+                                                         [0, 24 / np.tan(np.radians(22.5)), 24], [0, 0, 1]])
+        np.testing.assert_allclose((image.pose @ [0, 0, 5, 1])[:3], expected["corner_cam"], atol=1e-7)
 
 
 # --- errors: one, naming the file and the key --------------------------------------------------------------------
