@@ -353,16 +353,21 @@ class Simulation:
     def _detect(self, data: LaserScan | DepthFrame | CameraFrame) -> None:
         """The sensor's detector, if it has one, on a frame the sensor made: its detections, brought into the
         tracking frame and, with a map filter, rid of those on the map (placed there through the localisation, as
-        the cameras are), wait for the next tracking cycle (a sensor's latest replace its earlier ones)."""
+        the cameras are), wait for the next tracking cycle (a sensor's latest replace its earlier ones). A detector
+        that gives several named batches (a camera's foreground blobs and HOG windows) has each wait as
+        ``sensor/name``."""
         detector = self.pipeline.detectors.get(data.frame)
         if detector is None:
             return
         laser = self._lasers_by_name.get(data.frame)
         pose = laser.pose_in(self.robot.odom_pose) if laser is not None else self._camera_in_odom(data.frame)
-        detections = to_frame(detector.detect(data), pose, TRACKING_FRAME)
-        if self.pipeline.map_filter is not None:
-            detections = self.pipeline.map_filter.filter(detections, self.robot.world_T_odom)
-        self._pending[data.frame] = detections
+        found = detector.detect(data)
+        named = found.items() if isinstance(found, dict) else ((None, found),)
+        for name, batch in named:
+            detections = to_frame(batch, pose, TRACKING_FRAME)
+            if self.pipeline.map_filter is not None:
+                detections = self.pipeline.map_filter.filter(detections, self.robot.world_T_odom)
+            self._pending[data.frame if name is None else f"{data.frame}/{name}"] = detections
 
     def _camera_in_odom(self, name: str) -> np.ndarray:
         """The camera's optical frame in odom (a 4x4 transform), placed through the robot's localisation in the map

@@ -27,9 +27,10 @@ from .types import (CameraFrame, DepthFrame, DetectedPersons, LaserScan, SocialR
 
 class Detector(Protocol):
     """Turns one sensor's frame into detections in that sensor's frame; never reads the frame's ground truth
-    (``LaserScan.person_id``, camera segmentation)."""
+    (``LaserScan.person_id``, camera segmentation). A detector with several kinds of detection gives them as named
+    batches, which reach the fusion as ``sensor/name``."""
 
-    def detect(self, frame: LaserScan | DepthFrame | CameraFrame) -> DetectedPersons: ...
+    def detect(self, frame: LaserScan | DepthFrame | CameraFrame) -> DetectedPersons | dict[str, DetectedPersons]: ...
 
     def reset(self) -> None: ...
 

@@ -74,6 +74,14 @@ class OneAhead:
                                0.01 * np.eye(3)[None], np.ones(1))
 
 
+class NearAndFar(OneAhead):
+    """Two kinds of detection from one frame, as named batches: one person 1 m ahead, one 3 m ahead."""
+
+    def detect(self, frame):
+        near, far = OneAhead(1.0), OneAhead(3.0)
+        return {"near": near.detect(frame), "far": far.detect(frame)}
+
+
 def walkers(pipeline=None, **extra) -> dict:
     """The conftest room with people ahead of the parked robot (at (2, 2), facing +x): a standing group and a flow."""
     return room(waypoints={"east": {"position": [30, 6]}}, routes={"across": {"waypoints": ["east"]}},
@@ -215,6 +223,20 @@ def test_a_detector_on_a_camera_reads_its_images_and_its_detections_reach_odom()
         np.testing.assert_allclose(image.camera_matrix, [[24 / np.tan(np.radians(22.5)), 0, 32],
                                                          [0, 24 / np.tan(np.radians(22.5)), 24], [0, 0, 1]])
         np.testing.assert_allclose((image.pose @ [0, 0, 5, 1])[:3], expected["corner_cam"], atol=1e-7)
+
+
+def test_a_detectors_named_batches_reach_the_fusion_as_sensor_slash_name():
+    # the parked robot at (2, 2) facing +x with odom on it; the front laser at (0.25, 0) in base_link: the near
+    # batch's person at x = 1.25, the far one's at 3.25 in odom, each kept apart by the fusion (distance 0)
+    pipeline = {"detectors": {"front_laser": {"type": "test_assemble:NearAndFar"}}, "fusion": {"distance": 0.0}}
+    sim = Simulation(scenario_from_dict(walkers(pipeline)))
+    sim.warm_up()
+    frame = next(iter(sim.frames(0.2)))
+    assert {"front_laser/near", "front_laser/far"} <= set(frame.detector_outputs)
+    fused = frame.detections
+    for name, x in (("front_laser/near", 1.25), ("front_laser/far", 3.25)):
+        rows = fused.originals[name] >= 0
+        np.testing.assert_allclose(fused.position[rows, :2], [[x, 0.0]], atol=1e-9)
 
 
 # --- errors: one, naming the file and the key --------------------------------------------------------------------
