@@ -240,7 +240,7 @@ def _cmd_bench(args) -> int:
 
 
 # --seeds left out: how many each experiment takes
-DEFAULT_SEEDS = {"train-detector": 20, "table2": 20, "train-relations": 20, "groups": 5}
+DEFAULT_SEEDS = {"train-detector": 20, "table2": 20, "train-relations": 20, "groups": 5, "train-hog": 10}
 
 
 def _cmd_experiment(args) -> int:
@@ -252,6 +252,8 @@ def _cmd_experiment(args) -> int:
         return _cmd_train_detector(args)
     if args.what == "train-relations":
         return _cmd_train_relations(args)
+    if args.what == "train-hog":
+        return _cmd_train_hog(args)
     if args.what == "groups":
         from .experiments.groups import held_out_seeds, run, write
 
@@ -366,6 +368,25 @@ def _cmd_train_relations(args) -> int:
     print(f"{info['pairs']} pairs of tracks ({info['related']} related) from seeds {info['train_seeds'][0]}-"
           f"{info['train_seeds'][1]}; {time.perf_counter() - t0:.0f} s; models: "
           + ", ".join(f"{p} ({p.stat().st_size / 1024:.0f} KiB)" for p in paths))
+    return 0
+
+
+def _cmd_train_hog(args) -> int:
+    if not 1 <= args.seeds <= 100 or args.workers < 1:
+        raise UsageError(f"--seeds: expected 1 to 100 training seeds (from 4100), and --workers at least 1; got "
+                         f"{args.seeds} and {args.workers}")
+    out = _training_out(args)
+    from .experiments.train_hog import DURATION, MODELS_DIR, save, train
+
+    t0 = time.perf_counter()
+    model, info = train(args.seeds, args.workers, args.duration or DURATION)
+    paths = _saved((model, info), lambda m, where: [save(*m, where)], out, MODELS_DIR)
+    v = info["validation"]
+    print(f"{info['positives']} person windows, {info['negatives']} random and {info['hard_negatives']} hard "
+          f"negatives from seeds {info['train_seeds'][0]}-{info['train_seeds'][1]}; validation (IoU 0.5): F1 "
+          f"{v['f1']:.3f}, precision {v['precision']:.3f}, recall {v['recall']:.3f} at score {model.threshold:.3f}; "
+          f"{time.perf_counter() - t0:.0f} s; model: " + ", ".join(f"{p} ({p.stat().st_size / 1024:.0f} KiB)"
+                                                                  for p in paths))
     return 0
 
 
@@ -513,7 +534,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("experiment", help="experiments that take long: `experiment ppo` trains PPO on Navigate-v0, "
                                           "`experiment train-detector` the laser_learned segment classifiers, "
                                           "`experiment train-relations` the group stage's relation classifiers")
-    p.add_argument("what", choices=("ppo", "train-detector", "table2", "tune", "train-relations", "groups"),
+    p.add_argument("what", choices=("ppo", "train-detector", "table2", "tune", "train-relations", "groups",
+                                     "train-hog"),
                    help="ppo: stable-baselines3 PPO on crowdsim/Navigate-v0 with the tracks observation, against "
                         "the random policy (needs [rl]); train-detector: AdaBoost and random-forest segment "
                         "classifiers on labelled airport scans, scored against laser_segments on held-out seeds "
@@ -521,18 +543,21 @@ def build_parser() -> argparse.ArgumentParser:
                         "its claims checked; tune: Optuna over the pipeline's parameters for MOTA (needs [tune]); "
                         "train-relations: the svm and forest relation classifiers on tracker output of airport seeds "
                         "1100-1119 (needs [train]); groups: the group stage on held-out airport seeds (from 1200): "
-                        "each classifier against SPENCER's, each linkage, thresholds, tracker against true tracks")
+                        "each classifier against SPENCER's, each linkage, thresholds, tracker against true tracks; "
+                        "train-hog: the wall cameras' HOG person detector on rendered images of seed 001's room "
+                        "(needs [train])")
     p.add_argument("--minutes", type=float, default=30.0, help="wall-clock training budget (default 30)")
     p.add_argument("--envs", type=int, default=8, help="environments stepped together (default 8)")
     p.add_argument("--people", type=int, default=10, help="people per environment (default 10)")
     p.add_argument("--seed", type=int, default=0, help="training seed (evaluation seeds are disjoint)")
     p.add_argument("--eval-episodes", type=int, default=100, help="evaluation episodes per policy (default 100)")
-    p.add_argument("--out", help="output directory (default runs/<what>-<time>; train-detector and train-relations: "
-                                 "the shipped models, pipeline/detectors/models/ or pipeline/groups/models/, "
-                                 "replaced); must be new or empty")
+    p.add_argument("--out", help="output directory (default runs/<what>-<time>; train-detector, train-relations and "
+                                 "train-hog: the shipped models, pipeline/detectors/models/ or "
+                                 "pipeline/groups/models/, replaced); must be new or empty")
     p.add_argument("--seeds", type=int, help="train-detector: training seeds, from 1000 (default 20); table2: seeds "
                                              "from 1 (default 20); train-relations: training seeds, from 1100 "
-                                             "(default 20); groups: held-out seeds, from 1200 (default 5)")
+                                             "(default 20); groups: held-out seeds, from 1200 (default 5); "
+                                             "train-hog: training seeds, from 4100 (default 10)")
     p.add_argument("--duration", type=float, help="table2, tune, train-relations and groups: s of each airport run "
                                                   "(default: the scenario's; the others: 60)")
     p.add_argument("--trials", type=int, default=50, help="tune: trials (default 50)")
