@@ -1,0 +1,189 @@
+"""``crowdsim experiment train-hog``: trains the wall-camera HOG person detector (pipeline/detectors/hog.py) on this
+testbed's own rendered images and their exact boxes, as Dalal & Triggs trained theirs on INRIA's photographs.
+
+Data. Seed 001's room (``seed001_room_1``'s cameras, walls and furniture) with a stream of walkers in place of the
+sequences' few: people enter at the room's south and north edges, cross it and leave at the other, so many different
+people (clothes follow the person's id) pass both cameras. The sequences' own people are ids 1-4; here they are never
+positives, and their boxes are kept clear of negatives, so no sequence person is learnt. Seeds: training 4100..4100+N-1,
+validation 4200-4201 (the threshold); the sequences' evaluations use seeds 1-8 and the leg tuning 4000-4002.
+
+Windows. Positives: each person with 70% or more of its silhouette visible, its whole silhouette inside the image and
+at least ``MIN_HEIGHT`` pixels high, and its mirror image (Dalal & Triggs add reflections). Negatives: ``NEGATIVES``
+random windows an image at random scales, overlapping no person's box by more than 0.2; then one round of hard
+negatives (Dalal & Triggs): an image's ``NEGATIVES`` best-scored windows of the first model (above -1) that overlap no
+person by more than 0.3.
+Classifier: scikit-learn's LinearSVC (C = 0.01, Dalal & Triggs's soft linear SVM), needs the ``[train]`` extra; saved
+as plain arrays. Threshold: the score of peak F1 on the validation seeds, a detection right at intersection over
+union 0.5 or more with a person's visible box.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from pipeline.detectors.hog import (MODEL_FILE, MODEL_FORMAT, MODELS_DIR, PERSON_SHARE, WINDOW_CELLS, HogModel,
+                                    box_iou, integral, orientation_votes, window_features)
+from scenarios import scenario_from_dict
+from scenarios.loader import read_raw, resolve
+
+from .seeds import map_seeds
+
+SCENARIO = "seed001_room_1"
+TRAIN_SEED, VALIDATION_SEEDS = 4100, (4200, 4201)
+DURATION, START, EVERY = 60.0, 10.0, 5  # s run, s before the first image kept, tracker cycles between images kept
+SEQUENCE_IDS = 4  # the sequences' people: ids 1..4
+MIN_HEIGHT, MIN_VISIBLE = 64, 0.7
+NEGATIVES = 20
+SVM_C = 0.01
+SCALES = 1.2 ** np.arange(-1, 9)  # windows 107 to 550 pixels high
+
+
+def stream_scenario() -> dict:
+    """The room with walkers streaming across it (module docstring)."""
+    raw = read_raw(resolve(SCENARIO))
+    raw.pop("clusters")
+    raw["waypoints"] = {**raw["waypoints"], "south_door": {"position": [5.0, 0.4], "radius": 0.6},
+                        "north_door": {"position": [5.0, 7.8], "radius": 0.6}}
+    raw["routes"] = {"north": {"waypoints": ["north_door"], "sink": True},
+                     "south": {"waypoints": ["south_door"], "sink": True}}
+    raw["sources"] = [{"position": [3.0, 0.8], "size": [5.0, 0.5], "rate": 0.15, "routes": {"north": 1}},
+                      {"position": [7.0, 7.4], "size": [5.0, 0.5], "rate": 0.15, "routes": {"south": 1}}]
+    raw["name"] = "seed001_room_stream"
+    return scenario_from_dict(raw, "train-hog stream")
+
+
+@dataclass
+class Images:
+    """The kept images of one seed: per image the colour image and its persons' visible boxes, whether each is a
+    positive, and whether it may be a sequence person."""
+
+    rgb: list[np.ndarray]
+    boxes: list[np.ndarray]
+    positive: list[np.ndarray]
+
+
+def collect(seed: int, duration: float = DURATION) -> Images:
+    from crowdsim.loop import Simulation
+
+    sim = Simulation(stream_scenario())
+    sim.reset(seed)
+    out = Images([], [], [])
+    for k, frame in enumerate(sim.frames(duration)):
+        if frame.stamp < START or k % EVERY:
+            continue
+        for image in frame.camera_frames:
+            full = image.full_boxes
+            h, w = image.rgb.shape[:2]
+            inside = (full[:, 0] >= 0) & (full[:, 1] >= 0) & (full[:, 2] <= w) & (full[:, 3] <= h)
+            positive = (inside & (image.visible_fraction >= MIN_VISIBLE) & (full[:, 3] - full[:, 1] >= MIN_HEIGHT)
+                        & (image.ids > SEQUENCE_IDS))
+            out.rgb.append(image.rgb)
+            out.boxes.append(np.asarray(image.boxes, float))
+            out.positive.append(positive)
+    return out
+
+
+def windows(data: Images, rng: np.random.Generator, model: HogModel | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Features and labels of the positives (and mirrors) and negatives of every image; with ``model``, its hard
+    negatives instead of random ones."""
+    xs, ys = [], []
+    for rgb, boxes, positive in zip(data.rgb, data.boxes, data.positive):
+        h, w = rgb.shape[:2]
+        table = integral(orientation_votes(rgb))
+        mirror = integral(orientation_votes(rgb[:, ::-1]))
+        pos = boxes[positive]
+        if len(pos):
+            flipped = np.column_stack([w - pos[:, 2], pos[:, 1], w - pos[:, 0], pos[:, 3]])
+            xs += [window_features(table, pos).astype(np.float32), window_features(mirror, flipped).astype(np.float32)]
+            ys += [np.ones(2 * len(pos))]
+        if model is None:
+            neg = random_windows(rng, w, h, NEGATIVES)
+        else:
+            neg, _ = model.detect(rgb, SCALES, overlap=0.3)  # best first
+        if len(boxes) and len(neg):
+            neg = neg[box_iou(neg, boxes).max(axis=1) <= (0.2 if model is None else 0.3)]
+        neg = neg[:NEGATIVES]
+        if len(neg):
+            xs.append(window_features(table, neg).astype(np.float32))
+            ys.append(np.zeros(len(neg)))
+    return np.concatenate(xs), np.concatenate(ys)
+
+
+def random_windows(rng: np.random.Generator, w: int, h: int, n: int) -> np.ndarray:
+    """``n`` person boxes of windows at random scales and places inside a w x h image."""
+    scale = SCALES[rng.integers(0, len(SCALES), n)]
+    win_h, win_w = 8 * WINDOW_CELLS[0] * scale, 8 * WINDOW_CELLS[1] * scale
+    ok = (win_h < h) & (win_w < w)
+    scale, win_h, win_w = scale[ok], win_h[ok], win_w[ok]
+    u0 = rng.uniform(0, 1, len(scale)) * (w - win_w)
+    v0 = rng.uniform(0, 1, len(scale)) * (h - win_h)
+    margin_v = win_h * (1 - PERSON_SHARE) / 2
+    return np.column_stack([u0 + win_w / 4, v0 + margin_v, u0 + 3 * win_w / 4, v0 + win_h - margin_v])
+
+
+def fit(x: np.ndarray, y: np.ndarray) -> HogModel:
+    from sklearn.svm import LinearSVC
+
+    svm = LinearSVC(C=SVM_C, dual=True, max_iter=20_000, random_state=0).fit(x, y)
+    return HogModel(svm.coef_[0].astype(np.float32), float(svm.intercept_[0]), 0.0)
+
+
+def peak_f1_threshold(model: HogModel, data: Images) -> tuple[float, dict]:
+    """The score threshold of peak F1 over the images (a detection right at IoU 0.5 or more with a person's visible
+    box, each person matched once, best scores first), and the scores there."""
+    low = HogModel(model.weight, model.bias, -1.0)
+    scores, hits, n_persons = [], [], 0
+    for rgb, boxes in zip(data.rgb, data.boxes):
+        found, s = low.detect(rgb, SCALES)
+        n_persons += len(boxes)
+        taken = np.zeros(len(boxes), bool)
+        for k in np.argsort(-s).tolist():
+            hit = False
+            if len(boxes):
+                iou = box_iou(found[k:k + 1], boxes)[0]
+                iou[taken] = 0
+                j = int(iou.argmax())
+                if iou[j] >= 0.5:
+                    taken[j] = hit = True
+            scores.append(s[k])
+            hits.append(hit)
+    order = np.argsort(-np.array(scores))
+    tp = np.cumsum(np.array(hits)[order])
+    precision = tp / np.arange(1, len(tp) + 1)
+    recall = tp / max(n_persons, 1)
+    f1 = 2 * precision * recall / np.maximum(precision + recall, 1e-12)
+    best = int(f1.argmax())
+    return float(np.array(scores)[order][best]), {"f1": float(f1[best]), "precision": float(precision[best]),
+                                                   "recall": float(recall[best]), "persons": n_persons}
+
+
+def train(n_seeds: int = 10, workers: int = 2, duration: float = DURATION) -> tuple[HogModel, dict]:
+    seeds = list(range(TRAIN_SEED, TRAIN_SEED + n_seeds))
+    data = map_seeds(collect, seeds + list(VALIDATION_SEEDS), duration, workers=workers, desc="train-hog")
+    training = Images(*(sum((getattr(d, f) for d in data[:n_seeds]), []) for f in ("rgb", "boxes", "positive")))
+    validation = Images(*(sum((getattr(d, f) for d in data[n_seeds:]), []) for f in ("rgb", "boxes", "positive")))
+    rng = np.random.default_rng(0)
+    x, y = windows(training, rng)
+    first = fit(x, y)
+    x_hard, y_hard = windows(training, rng, HogModel(first.weight, first.bias, -1.0))
+    model = fit(np.concatenate([x, x_hard[y_hard == 0]]), np.concatenate([y, y_hard[y_hard == 0]]))
+    threshold, scores = peak_f1_threshold(model, validation)
+    info = {"scenario": "seed001_room_stream", "train_seeds": [seeds[0], seeds[-1]],
+            "validation_seeds": list(VALIDATION_SEEDS), "positives": int(y.sum()), "negatives": int((y == 0).sum()),
+            "hard_negatives": int((y_hard == 0).sum()), "svm_c": SVM_C, "validation": scores}
+    return HogModel(model.weight, model.bias, threshold), info
+
+
+def save(model: HogModel, info: dict, out: Path = MODELS_DIR) -> Path:
+    """The model as an .npz of plain arrays with a JSON header, replacing the file whole."""
+    path = Path(out) / MODEL_FILE
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.partial.npz")
+    np.savez_compressed(tmp, header=np.array(json.dumps({"format": MODEL_FORMAT, "info": info})),
+                        weight=model.weight, bias=np.array(model.bias), threshold=np.array(model.threshold))
+    os.replace(tmp, path)
+    return path

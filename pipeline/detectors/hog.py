@@ -1,0 +1,176 @@
+"""Histograms of oriented gradients and a linear person classifier over them (Dalal & Triggs 2005, "Histograms of
+oriented gradients for human detection", CVPR; seed 001 Sec. 4.3 runs it on its wall cameras).
+
+Dalal & Triggs's default detector: a 64 x 128 window of 8 x 8-pixel cells, 9 orientation bins over 0-180 degrees,
+blocks of 2 x 2 cells every cell, L2-Hys block normalisation (clipped at 0.2), centred [-1, 0, 1] gradients taken in
+the colour channel of the largest magnitude, votes split linearly between the two nearest orientation bins; 3,780
+features. Two simplifications, both for speed: a vote goes to its pixel's cell only (no spatial interpolation), and
+the scales of the search share one gradient image: the cells of scale s are 8 s pixels wide, summed from one
+integral image of the orientation votes (the feature pyramid of Dollar et al. 2014, "Fast feature pyramids for object
+detection", PAMI, approximated with its gradients at full resolution). Training and detection compute features the
+same way, so the classifier learns these features.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+ORIENTATIONS = 9
+CELL = 8  # pixels at scale 1
+WINDOW_CELLS = (16, 8)  # rows, columns: 128 x 64 pixels at scale 1
+BLOCK = 2  # cells
+PERSON_SHARE = 96 / 128  # Dalal & Triggs's windows hold a person 96 pixels high in 128
+L2HYS_CLIP = 0.2
+MODELS_DIR = Path(__file__).parent / "models"
+MODEL_FILE = "hog_person.npz"  # `crowdsim experiment train-hog` makes it
+MODEL_FORMAT = "crowdsim-hog/1"
+
+
+def orientation_votes(rgb: np.ndarray) -> np.ndarray:
+    """[h, w, 9] float32: each pixel's gradient magnitude split between its two nearest orientation bins (unsigned,
+    0-180 degrees; bin k centred at (k + 0.5) 20 degrees), the gradient from the channel where it is largest."""
+    image = rgb.astype(np.float32)
+    gx = np.zeros_like(image)
+    gy = np.zeros_like(image)
+    gx[:, 1:-1] = image[:, 2:] - image[:, :-2]
+    gy[1:-1] = image[2:] - image[:-2]
+    magnitude2 = gx * gx + gy * gy
+    channel = magnitude2.argmax(axis=-1)
+    pick = np.arange(channel.size) * 3 + channel.ravel()  # flat index of each pixel's strongest channel
+    gx, gy = gx.ravel()[pick], gy.ravel()[pick]
+    magnitude = np.sqrt(magnitude2.ravel()[pick])
+    position = (np.arctan2(gy, gx) % np.pi) * (ORIENTATIONS / np.pi) - 0.5  # in bin widths from bin 0's centre
+    lower = np.floor(position)
+    upper_share = position - lower
+    lower = lower.astype(np.int64) % ORIENTATIONS
+    votes = np.zeros(channel.shape + (ORIENTATIONS,), np.float32)
+    flat = votes.reshape(-1)
+    base = np.arange(channel.size) * ORIENTATIONS
+    flat[base + lower] = magnitude * (1 - upper_share)
+    flat[base + (lower + 1) % ORIENTATIONS] = magnitude * upper_share  # the other bin of the same pixel
+    return votes
+
+
+def integral(votes: np.ndarray) -> np.ndarray:
+    """[h + 1, w + 1, 9] float64 sums of the votes above and left of each pixel corner."""
+    out = np.zeros((votes.shape[0] + 1, votes.shape[1] + 1, votes.shape[2]))
+    out[1:, 1:] = votes
+    np.cumsum(out, axis=0, out=out)
+    np.cumsum(out, axis=1, out=out)
+    return out
+
+
+def cells(table: np.ndarray, origin: tuple[float, float], size: float, shape: tuple[int, int]) -> np.ndarray:
+    """[rows, cols, 9] cell histograms of cells ``size`` pixels wide, the first with its top-left corner at
+    ``origin`` (u, v), edges rounded to whole pixels and clipped to the image."""
+    h, w = table.shape[0] - 1, table.shape[1] - 1
+    v = np.clip(np.rint(origin[1] + size * np.arange(shape[0] + 1)).astype(np.int64), 0, h)
+    u = np.clip(np.rint(origin[0] + size * np.arange(shape[1] + 1)).astype(np.int64), 0, w)
+    corner = table[v][:, u]
+    return corner[1:, 1:] - corner[:-1, 1:] - corner[1:, :-1] + corner[:-1, :-1]
+
+
+def blocks(cell_histograms: np.ndarray) -> np.ndarray:
+    """[rows - 1, cols - 1, 36]: each 2 x 2 block of cells, L2-Hys normalised (L2, clipped at 0.2, L2 again)."""
+    c = cell_histograms
+    b = np.concatenate([c[:-1, :-1], c[:-1, 1:], c[1:, :-1], c[1:, 1:]], axis=-1)
+    b = b / np.sqrt((b * b).sum(axis=-1, keepdims=True) + 1e-6)
+    b = np.minimum(b, L2HYS_CLIP)
+    return b / np.sqrt((b * b).sum(axis=-1, keepdims=True) + 1e-6)
+
+
+def window_features(table: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """[n, 3780] the features of windows around person boxes [n, 4] (u0, v0, u1, v1): the window 4/3 the box's height
+    and half as wide, centred on it (Dalal & Triggs's margins), at the scale that makes it 128 pixels high."""
+    box = np.asarray(box, float).reshape(-1, 4)
+    height = (box[:, 3] - box[:, 1]) / PERSON_SHARE
+    size = height / WINDOW_CELLS[0]
+    centre_u, centre_v = (box[:, 0] + box[:, 2]) / 2, (box[:, 1] + box[:, 3]) / 2
+    out = [blocks(cells(table, (cu - size_k * WINDOW_CELLS[1] / 2, cv - size_k * WINDOW_CELLS[0] / 2), size_k,
+                        WINDOW_CELLS)).ravel()
+           for cu, cv, size_k in zip(centre_u, centre_v, size)]
+    return np.array(out).reshape(len(box), -1)
+
+
+@dataclass(frozen=True)
+class HogModel:
+    """A linear classifier on the window features: score = features . weight + bias; a person where it exceeds
+    ``threshold``."""
+
+    weight: np.ndarray  # [3780]
+    bias: float
+    threshold: float
+
+    def score_map(self, table: np.ndarray, size: float) -> np.ndarray:
+        """The score of every window of cells ``size`` pixels wide on the cell grid from the image's corner: [rows,
+        cols], window (r, c) covering pixels from (c size, r size), 64 size wide and 128 size high."""
+        h, w = table.shape[0] - 1, table.shape[1] - 1
+        grid = (int(h // size), int(w // size))
+        rows, cols = grid[0] - WINDOW_CELLS[0] + 1, grid[1] - WINDOW_CELLS[1] + 1
+        if rows <= 0 or cols <= 0:
+            return np.zeros((0, 0))
+        b = blocks(cells(table, (0.0, 0.0), size, grid))
+        weight = self.weight.reshape(WINDOW_CELLS[0] - 1, WINDOW_CELLS[1] - 1, -1)
+        score = np.full((rows, cols), self.bias)
+        for i in range(weight.shape[0]):
+            for j in range(weight.shape[1]):
+                score += b[i:i + rows, j:j + cols] @ weight[i, j]
+        return score
+
+    def detect(self, rgb: np.ndarray, scales: np.ndarray, overlap: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+        """Person boxes [k, 4] (u0, v0, u1, v1 of the person, 3/4 of the window's height) and scores [k] over the
+        given scales, greedy non-maximum suppression at ``overlap`` (intersection over union), best first."""
+        table = integral(orientation_votes(rgb))
+        found, scores = [], []
+        for scale in scales:
+            size = CELL * scale
+            score = self.score_map(table, size)
+            r, c = np.nonzero(score > self.threshold)
+            u0, v0 = c * size, r * size
+            margin_v = WINDOW_CELLS[0] * size * (1 - PERSON_SHARE) / 2
+            margin_u = WINDOW_CELLS[1] * size / 4
+            found.append(np.column_stack([u0 + margin_u, v0 + margin_v, u0 + WINDOW_CELLS[1] * size - margin_u,
+                                          v0 + WINDOW_CELLS[0] * size - margin_v]))
+            scores.append(score[r, c])
+        boxes, scores = np.concatenate(found).reshape(-1, 4), np.concatenate(scores)
+        keep = non_maximum_suppression(boxes, scores, overlap)
+        return boxes[keep], scores[keep]
+
+
+def load_model(path: str | Path | None = None) -> HogModel:
+    """The shipped model, or the .npz at ``path`` that `crowdsim experiment train-hog --out` wrote."""
+    path = Path(path) if path is not None else MODELS_DIR / MODEL_FILE
+    try:
+        with np.load(path) as data:
+            header = json.loads(str(data["header"]))
+            model = HogModel(data["weight"], float(data["bias"]), float(data["threshold"]))
+    except (OSError, ValueError, KeyError) as e:
+        raise ValueError(f"model: {path} is not a HOG model ({e}); expected an .npz written by `crowdsim experiment "
+                         "train-hog`") from None
+    if header.get("format") != MODEL_FORMAT:
+        raise ValueError(f"model: {path} has format {header.get('format')!r}; expected {MODEL_FORMAT}")
+    return model
+
+
+def box_iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Intersection over union [n, m] of boxes a [n, 4] and b [m, 4] (u0, v0, u1, v1)."""
+    lo = np.maximum(a[:, None, :2], b[None, :, :2])
+    hi = np.minimum(a[:, None, 2:], b[None, :, 2:])
+    inter = np.prod(np.clip(hi - lo, 0, None), axis=-1)
+    area_a = np.prod(a[:, 2:] - a[:, :2], axis=-1)
+    area_b = np.prod(b[:, 2:] - b[:, :2], axis=-1)
+    return inter / np.maximum(area_a[:, None] + area_b[None] - inter, 1e-12)
+
+
+def non_maximum_suppression(boxes: np.ndarray, scores: np.ndarray, overlap: float) -> np.ndarray:
+    """Indices of the boxes kept: the best first, then each one overlapping no kept one by more than ``overlap``."""
+    order = np.argsort(-scores, kind="stable")
+    keep: list[int] = []
+    for k in order.tolist():
+        if not keep or box_iou(boxes[k:k + 1], boxes[keep]).max() <= overlap:
+            keep.append(k)
+    return np.array(keep, np.int64)

@@ -1,0 +1,37 @@
+"""The HOG detector's training data: the streaming room, random negative windows, saving and loading the model."""
+
+import numpy as np
+import pytest
+
+from crowdsim.experiments.train_hog import SCALES, random_windows, save, stream_scenario
+from pipeline.detectors.hog import PERSON_SHARE, HogModel, load_model
+
+
+def test_the_training_room_streams_walkers_and_keeps_the_sequence_room():
+    s = stream_scenario()
+    assert s["clusters"] == [] and len(s["sources"]) == 2
+    assert all(route["sink"] for route in s["routes"].values())
+    assert [c["width"] for c in s["sensors"]["wall_cameras"]] == [640, 640]  # seed 001's cameras, as the sequences
+
+
+def test_random_windows_lie_inside_the_image_with_a_persons_shape():
+    boxes = random_windows(np.random.default_rng(0), 640, 480, 500)
+    assert 0 < len(boxes) <= 500
+    height, width = boxes[:, 3] - boxes[:, 1], boxes[:, 2] - boxes[:, 0]
+    # a person box is 3/4 of its window's height and half its width (a window is 128 x 64 at scale 1)
+    np.testing.assert_allclose(height / width, PERSON_SHARE * 128 / 32)
+    margin_v = height / PERSON_SHARE * (1 - PERSON_SHARE) / 2
+    assert (boxes[:, 1] - margin_v >= 0).all() and (boxes[:, 3] + margin_v <= 480).all()
+    assert (boxes[:, 0] - width / 2 >= 0).all() and (boxes[:, 2] + width / 2 <= 640).all()
+    assert height.min() >= 96 * SCALES.min() - 1e-9
+
+
+def test_a_saved_model_keeps_its_numbers_and_a_bad_file_is_named(tmp_path):
+    model = HogModel(np.arange(3780, dtype=np.float32) / 3780, -0.5, 0.25)
+    again = load_model(save(model, {"test": True}, tmp_path))
+    np.testing.assert_array_equal(again.weight, model.weight)
+    assert (again.bias, again.threshold) == (-0.5, 0.25)
+    bad = tmp_path / "bad.npz"
+    bad.write_text("no model")
+    with pytest.raises(ValueError, match=f"model: {bad} is not a HOG model"):
+        load_model(bad)
