@@ -16,6 +16,7 @@ from scenarios.schema import ScenarioError, import_class
 from .detectors.laser_segments import SegmentDetector
 from .detectors.learned_segments import LearnedSegmentDetector
 from .detectors.legs import LegDetector
+from .detectors.wall_camera import WallCameraDetector
 from .fusion import NearestFusion
 from .groups import CoherentMotionGroups
 from .map_filter import MapFilter
@@ -61,7 +62,7 @@ class GroupStage(Protocol):
 
 
 DETECTORS: dict[str, type] = {"laser_segments": SegmentDetector, "laser_learned": LearnedSegmentDetector,
-                              "laser_legs": LegDetector}
+                              "laser_legs": LegDetector, "wall_people": WallCameraDetector}
 FUSIONS: dict[str, type] = {"nearest": NearestFusion}
 TRACKERS: dict[str, type] = {"nnt": NearestNeighbourTracker, "mht": MultiHypothesisTracker}
 GROUP_STAGES: dict[str, type] = {"coherent_motion": CoherentMotionGroups}

@@ -366,9 +366,29 @@ LEG_DETECTOR = Schema({
     "position_variance": F("float", 0.05, min=0.0, exclusive_min=True, doc="m^2, of each person's position"),
 })
 
-DETECTOR_TYPES = {"laser_segments": SEGMENT_DETECTOR, "laser_learned": LEARNED_DETECTOR, "laser_legs": LEG_DETECTOR}
+# seed 001 Sec. 4.2-4.3 names the methods (Sigma-Delta, morphology, an aspect ratio; HOG) but gives no parameter
+WALL_CAMERA_DETECTOR = Schema({
+    "foreground": F("bool", True, doc="Sigma-Delta foreground blobs (the batch `fseg`)"),
+    "hog": F("bool", True, doc="HOG person windows (the batch `hog`)"),
+    "model": F("str", None, optional=True,
+               doc="the HOG model: left out, the shipped one (`crowdsim experiment train-hog`); or the path of the "
+                   ".npz it wrote with --out"),
+    "hog_scales": F(ListOf(F("float", min=0.1)), [float(1.2 ** k) for k in range(8)],
+                    doc="window scales searched (1: 64 x 128 pixels); the default covers a person 2.2-8 m from a "
+                        "640 x 480 camera at 45 degrees"),
+    "bootstrap": F("int", 15, min=1, doc="frames whose median starts the background model (no detection before)"),
+    "min_area": F("int", 150, min=1, doc="pixels, least foreground blob"),
+    "min_aspect": F("float", 1.2, min=0.0, doc="least height / width of a foreground blob"),
+    "max_aspect": F("float", 5.0, min=0.0, doc="largest height / width of a foreground blob"),
+    "position_variance": F("float", 0.09, min=0.0, exclusive_min=True,
+                           doc="m^2 along the floor (seed 001 Table 1: Sigma = diag(0.09, 0.09))"),
+})
+
+DETECTOR_TYPES = {"laser_segments": SEGMENT_DETECTOR, "laser_learned": LEARNED_DETECTOR, "laser_legs": LEG_DETECTOR,
+                  "wall_people": WALL_CAMERA_DETECTOR}
 # the `sensors` list whose frames each built-in detector reads
-DETECTOR_READS = {"laser_segments": "lasers", "laser_learned": "lasers", "laser_legs": "lasers"}
+DETECTOR_READS = {"laser_segments": "lasers", "laser_learned": "lasers", "laser_legs": "lasers",
+                  "wall_people": "wall_cameras"}
 
 NEAREST_FUSION = Schema({
     "distance": F("float", 0.4, min=0.0, doc="m, detections of two sensors nearer than this are one person"),
