@@ -347,16 +347,24 @@ def _cmd_train_detector(args) -> int:
     models, report = train(args.seeds, quick=args.quick, workers=args.workers)
     paths = _saved(models, save_models, out, MODELS_DIR)
     print(report)
-    print(f"{time.perf_counter() - t0:.0f} s; models: " + ", ".join(f"{p} ({p.stat().st_size / 1024:.0f} KiB)"
-                                                                   for p in paths))
+    print(f"{time.perf_counter() - t0:.0f} s; models: " + _sizes(paths))
     return 0
 
 
+def _training_seeds_out(args, most: int, first: int) -> Path | None:
+    """``_training_out`` after checking --seeds (1 to ``most`` training seeds from ``first``) and --workers."""
+    if not 1 <= args.seeds <= most or args.workers < 1:
+        raise UsageError(f"--seeds: expected 1 to {most} training seeds (from {first}), and --workers at least 1; "
+                         f"got {args.seeds} and {args.workers}")
+    return _training_out(args)
+
+
+def _sizes(paths: list[Path]) -> str:
+    return ", ".join(f"{p} ({p.stat().st_size / 1024:.0f} KiB)" for p in paths)
+
+
 def _cmd_train_relations(args) -> int:
-    if not 1 <= args.seeds <= 20 or args.workers < 1:
-        raise UsageError(f"--seeds: expected 1 to 20 training seeds (1100-1119), and --workers at least 1; got "
-                         f"{args.seeds} and {args.workers}")
-    out = _training_out(args)
+    out = _training_seeds_out(args, 20, 1100)
     from pipeline.groups.relations import MODELS_DIR
 
     from .experiments.relations import save_models, train
@@ -366,16 +374,12 @@ def _cmd_train_relations(args) -> int:
     paths = _saved(models, save_models, out, MODELS_DIR)
     info = next(iter(models.values()))[1]
     print(f"{info['pairs']} pairs of tracks ({info['related']} related) from seeds {info['train_seeds'][0]}-"
-          f"{info['train_seeds'][1]}; {time.perf_counter() - t0:.0f} s; models: "
-          + ", ".join(f"{p} ({p.stat().st_size / 1024:.0f} KiB)" for p in paths))
+          f"{info['train_seeds'][1]}; {time.perf_counter() - t0:.0f} s; models: " + _sizes(paths))
     return 0
 
 
 def _cmd_train_hog(args) -> int:
-    if not 1 <= args.seeds <= 100 or args.workers < 1:
-        raise UsageError(f"--seeds: expected 1 to 100 training seeds (from 4100), and --workers at least 1; got "
-                         f"{args.seeds} and {args.workers}")
-    out = _training_out(args)
+    out = _training_seeds_out(args, 100, 4100)
     from .experiments.train_hog import DURATION, MODELS_DIR, save, train
 
     t0 = time.perf_counter()
@@ -385,8 +389,7 @@ def _cmd_train_hog(args) -> int:
     print(f"{info['positives']} person windows, {info['negatives']} random and {info['hard_negatives']} hard "
           f"negatives from seeds {info['train_seeds'][0]}-{info['train_seeds'][1]}; validation (IoU 0.5): F1 "
           f"{v['f1']:.3f}, precision {v['precision']:.3f}, recall {v['recall']:.3f} at score {model.threshold:.3f}; "
-          f"{time.perf_counter() - t0:.0f} s; model: " + ", ".join(f"{p} ({p.stat().st_size / 1024:.0f} KiB)"
-                                                                  for p in paths))
+          f"{time.perf_counter() - t0:.0f} s; model: " + _sizes(paths))
     return 0
 
 

@@ -35,3 +35,17 @@ def test_a_saved_model_keeps_its_numbers_and_a_bad_file_is_named(tmp_path):
     bad.write_text("no model")
     with pytest.raises(ValueError, match=f"model: {bad} is not a HOG model"):
         load_model(bad)
+
+
+def test_the_training_commands_refuse_bad_seeds_and_a_used_out(tmp_path, capsys):
+    from crowdsim.cli import main
+
+    assert main(["experiment", "train-hog", "--seeds", "0"]) == 2
+    assert "--seeds: expected 1 to 100 training seeds (from 4100), and --workers at least 1; got 0" in \
+        capsys.readouterr().err
+    assert main(["experiment", "train-relations", "--seeds", "21"]) == 2
+    assert "--seeds: expected 1 to 20 training seeds (from 1100)" in capsys.readouterr().err
+    (tmp_path / "kept").write_text("x")
+    assert main(["experiment", "train-hog", "--out", str(tmp_path)]) == 2
+    assert "already exists and is not empty" in capsys.readouterr().err
+    assert (tmp_path / "kept").read_text() == "x"
