@@ -28,6 +28,7 @@ import numpy as np
 
 from pipeline.detectors.hog import (MODEL_FILE, MODEL_FORMAT, MODELS_DIR, PERSON_SHARE, WINDOW_CELLS, HogModel,
                                     box_iou, integral, orientation_votes, window_features)
+from pipeline.detectors.wall_camera import HOG_SCALES
 from scenarios import scenario_from_dict
 from scenarios.loader import read_raw, resolve
 
@@ -40,7 +41,7 @@ SEQUENCE_IDS = 4  # the sequences' people: ids 1..4
 MIN_HEIGHT, MIN_VISIBLE = 64, 0.7
 NEGATIVES = 20
 SVM_C = 0.01
-SCALES = 1.2 ** np.arange(-1, 9)  # windows 107 to 550 pixels high
+SCALES = np.array(HOG_SCALES)  # the detector's: negatives, hard negatives and the threshold at the scales it searches
 
 
 def stream_scenario() -> dict:
@@ -59,8 +60,8 @@ def stream_scenario() -> dict:
 
 @dataclass
 class Images:
-    """The kept images of one seed: per image the colour image and its persons' visible boxes, whether each is a
-    positive, and whether it may be a sequence person."""
+    """The kept images of one seed: per image the colour image, its persons' visible boxes, and whether each is a
+    positive."""
 
     rgb: list[np.ndarray]
     boxes: list[np.ndarray]

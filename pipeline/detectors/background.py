@@ -10,7 +10,7 @@ estimation", Pattern Recognition Letters 28(3)), per pixel and colour channel, i
     foreground where O > V in any channel.
 
 A background model needs a start: the per-pixel median of the first ``bootstrap`` frames (walkers move, so the
-median is the room), with V from N times the last difference; no detection comes before it is complete. Then an
+median is the room), with V at V_min; no detection comes before it is complete. Then an
 opening removes speckle, a closing joins a person's parts, and each connected blob of ``min_area`` pixels or more
 whose height is ``min_aspect``..``max_aspect`` times its width is a person (a standing person: about 3.4).
 """

@@ -11,9 +11,9 @@ probability that the two walk together.
 Classifiers (``load_model``): ``spencer``, the released default of SPENCER, a linear nu-SVC on the raw indicators
 with libsvm's Platt sigmoid; ``svm``, ours, a linear SVM on the cubic monomials of the standardised indicators (the
 function class of a cubic polynomial kernel) with a Platt sigmoid fitted on held-out seeds; ``forest``, ours, a
-random forest whose leaves hold the share of related pairs, shipped tabulated (``RelationTable``). Ours are trained on pairs of tracker output labelled by
-the true groups of the persons the tracks matched (``crowdsim experiment train-relations``), so they learn the
-tracker's noise; they ship in ``models/`` as plain arrays.
+random forest whose leaves hold the share of related pairs, shipped tabulated (``RelationTable``). Ours are trained
+on pairs of tracker output labelled by the true groups of the persons the tracks matched (``crowdsim experiment
+train-relations``), so they learn the tracker's noise; they ship in ``models/`` as plain arrays.
 
 ``LongTermRelations`` is SPENCER's optional temporal smoothing (``long_term_relations.py``).
 """
