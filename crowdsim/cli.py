@@ -266,6 +266,17 @@ def _cmd_experiment(args) -> int:
         print(write_directory(out, lambda tmp: write(tmp, results, seeds)))
         print(f"\n{out / 'groups.md'}, groups.json, groups.png")
         return 0
+    if args.what == "seed001":
+        from .experiments.seed001 import experiment, write
+
+        if args.runs < 1 or args.workers < 1:
+            raise UsageError(f"--runs and --workers: expected at least 1, got {args.runs} and {args.workers}")
+        out = Path(args.out) if args.out else Path("runs") / f"seed001-{time.strftime('%Y%m%d-%H%M%S')}"
+        check_out_dir(out)
+        results = experiment(args.runs, workers=args.workers)
+        print(write_directory(out, lambda tmp: write(tmp, results)))
+        print(f"\n{out / 'seed001.md'}, seed001.json, seed001.png")
+        return 0
     if args.what == "table2":
         from .experiments.table2 import table2, write
 
@@ -538,7 +549,7 @@ def build_parser() -> argparse.ArgumentParser:
                                           "`experiment train-detector` the laser_learned segment classifiers, "
                                           "`experiment train-relations` the group stage's relation classifiers")
     p.add_argument("what", choices=("ppo", "train-detector", "table2", "tune", "train-relations", "groups",
-                                     "train-hog"),
+                                     "train-hog", "seed001"),
                    help="ppo: stable-baselines3 PPO on crowdsim/Navigate-v0 with the tracks observation, against "
                         "the random policy (needs [rl]); train-detector: AdaBoost and random-forest segment "
                         "classifiers on labelled airport scans, scored against laser_segments on held-out seeds "
@@ -548,7 +559,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "1100-1119 (needs [train]); groups: the group stage on held-out airport seeds (from 1200): "
                         "each classifier against SPENCER's, each linkage, thresholds, tracker against true tracks; "
                         "train-hog: the wall cameras' HOG person detector on rendered images of seed 001's room "
-                        "(needs [train])")
+                        "(needs [train]); seed001: seed 001's Tables 2-6, its RJMCMC filter over the laser and the "
+                        "wall cameras in four modes on sequences I-III, its claims checked")
     p.add_argument("--minutes", type=float, default=30.0, help="wall-clock training budget (default 30)")
     p.add_argument("--envs", type=int, default=8, help="environments stepped together (default 8)")
     p.add_argument("--people", type=int, default=10, help="people per environment (default 10)")
@@ -563,12 +575,14 @@ def build_parser() -> argparse.ArgumentParser:
                                              "train-hog: training seeds, from 4100 (default 10)")
     p.add_argument("--duration", type=float, help="table2, tune, train-relations and groups: s of each airport run "
                                                   "(default: the scenario's; the others: 60)")
+    p.add_argument("--runs", type=int, default=8, help="seed001: filter runs per sequence and mode (default 8, as "
+                                                       "seed 001's)")
     p.add_argument("--trials", type=int, default=50, help="tune: trials (default 50)")
     p.add_argument("--storage", help="tune: an Optuna storage to keep and resume the study, e.g. sqlite:///study.db")
     p.add_argument("--quick", action="store_true", help="train-detector: 4 short training seeds, 1 validation and "
                                                         "1 test seed (a smoke test, not models to ship)")
-    p.add_argument("--workers", type=int, default=2, help="train-detector, table2, train-relations and groups: "
-                                                          "processes running the simulations (default 2)")
+    p.add_argument("--workers", type=int, default=2, help="train-detector, table2, train-relations, groups and "
+                                                          "seed001: processes running the simulations (default 2)")
     p.set_defaults(func=_cmd_experiment)
     p = sub.add_parser("dataset", help="labelled datasets: generate, export, evaluate-detector "
                                        "(docs/dataset-format.md)")

@@ -272,6 +272,8 @@ class Simulation:
         outputs, self._pending = self._pending, {}
         detections = self.pipeline.fusion.fuse(outputs)
         t3 = time.perf_counter()
+        if self._pending_camera and hasattr(self.pipeline.tracker, "see"):  # a tracker that weighs colour
+            self.pipeline.tracker.see(self._pending_camera)
         tracks = self.pipeline.tracker.update(stamp, detections)
         self.timing.tracker_s += time.perf_counter() - t3
         self.timing.tracker_cycles += 1

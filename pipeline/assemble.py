@@ -22,6 +22,7 @@ from .groups import CoherentMotionGroups
 from .map_filter import MapFilter
 from .tracking.mht import MultiHypothesisTracker
 from .tracking.nnt import NearestNeighbourTracker
+from .tracking.rjmcmc import RjmcmcTracker
 from .types import (CameraFrame, DepthFrame, DetectedPersons, LaserScan, SocialRelations, TrackedGroups,
                     TrackedPersons)
 
@@ -64,7 +65,8 @@ class GroupStage(Protocol):
 DETECTORS: dict[str, type] = {"laser_segments": SegmentDetector, "laser_learned": LearnedSegmentDetector,
                               "laser_legs": LegDetector, "wall_people": WallCameraDetector}
 FUSIONS: dict[str, type] = {"nearest": NearestFusion}
-TRACKERS: dict[str, type] = {"nnt": NearestNeighbourTracker, "mht": MultiHypothesisTracker}
+TRACKERS: dict[str, type] = {"nnt": NearestNeighbourTracker, "mht": MultiHypothesisTracker,
+                             "rjmcmc": RjmcmcTracker}
 GROUP_STAGES: dict[str, type] = {"coherent_motion": CoherentMotionGroups}
 
 
@@ -111,8 +113,11 @@ def build_pipeline(spec: dict, lasers: Sequence[str], floor_plan: dict | None = 
         return build_part(own.get(name, spec["detector"]), DETECTORS, source, key)
 
     detectors = {name: detector(name) for name in [*lasers, *(n for n in own if n not in lasers)]}
-    map_filter = (MapFilter(floor_plan["walls"], floor_plan["obstacles"], **spec["map_filter"])
-                  if spec["map_filter"] is not None and floor_plan is not None else None)
+    map_filter = None
+    if spec["map_filter"] is not None and floor_plan is not None:
+        params = dict(spec["map_filter"])
+        obstacles = floor_plan["obstacles"] if params.pop("obstacles", True) else []
+        map_filter = MapFilter(floor_plan["walls"], obstacles, **params)
     return Pipeline(detectors, build_part(spec["fusion"], FUSIONS, source, "pipeline.fusion"),
                     build_part(spec["tracker"], TRACKERS, source, "pipeline.tracker"),
                     build_part(spec["groups"], GROUP_STAGES, source, "pipeline.groups"), map_filter)

@@ -361,6 +361,8 @@ LEG_DETECTOR = Schema({
                          doc="deg, a blob with a sharper inscribed angle is a sharp structure, no leg"),
     "pair_distance": F("float", 0.5, min=0.0, doc="m, farthest two legs of one person"),
     "single_legs": F("bool", True, doc="a leg without a partner is a person too (the other hidden behind it)"),
+    "blobs": F("bool", False, doc="also give the raw blobs: the named batches `legs` and `blobs` (seed 001's l_b, "
+                                  "which the rjmcmc tracker's likelihood weighs)"),
     "blob_min_radius": F("float", 0.03, min=0.0, doc="m, least half-width of a raw blob (thinner: a table leg)"),
     "blob_max_radius": F("float", 0.3, min=0.0, doc="m, largest half-width of a raw blob (wider: a wall)"),
     "position_variance": F("float", 0.05, min=0.0, exclusive_min=True, doc="m^2, of each person's position"),
@@ -476,7 +478,53 @@ MHT = Schema({
     "initial_velocity_variance": F("float", 1.0, min=0.0, exclusive_min=True, doc="m^2/s^2 of a new track"),
 })
 
-TRACKER_TYPES = {"nnt": NNT, "mht": MHT}
+# seed 001's RJMCMC particle filter (pipeline/tracking/rjmcmc.py; its Table 1 unless said; a test keeps these
+# defaults equal to the class's)
+RJMCMC = Schema({
+    "weights": F(MapOf(F("float", min=0.0)),
+                 {"laser/legs": 0.16, "laser/blobs": 0.16, "camera_1/fseg": 0.22, "camera_1/hog": 0.2,
+                  "camera_2/fseg": 0.22, "camera_2/hog": 0.2},
+                 doc="k_d per detection source (`sensor/batch`, as the detectors name their batches; Table 1)"),
+    "proposal_sources": F(ListOf(F("str")), ["laser/legs", "camera_1/fseg", "camera_1/hog", "camera_2/fseg",
+                                             "camera_2/hog"],
+                          doc="the sources where targets are born (Eq. 2: the leg detector's persons and the cameras')"),
+    "likelihood_sources": F(ListOf(F("str")), ["laser/blobs", "camera_1/fseg", "camera_1/hog", "camera_2/fseg",
+                                               "camera_2/hog"],
+                            doc="the sources the likelihood weighs (Eq. 5: the laser's raw blobs l_b and the cameras')"),
+    "move_probabilities": F(ListOf(F("float", min=0.0, max=1.0), min_items=4), [0.15, 0.8, 0.02, 0.03],
+                            doc="q_m of add, update, remove, swap (Table 1)"),
+    "step_variance": F("float", 0.09, min=0.0, exclusive_min=True,
+                       doc="m^2, Sigma of the random walk and of every Gaussian kernel (Table 1)"),
+    "interaction_sd": F("float", 0.75, min=0.0, exclusive_min=True, doc="m, sigma of the MRF (Eq. 4, Table 1)"),
+    "samples": F("int", 150, min=1, doc="N, particles kept per cycle (Table 1)"),
+    "burn_in": F("int", 40, min=0, doc="N_B, burn-in steps per cycle (Table 1)"),
+    "likelihood": F("str", "pooled", choices=("pooled", "mean"),
+                    doc="pooled: each source's detections a Poisson process of clutter and of the targets, the sources "
+                        "pooled with the weights k_d, each target with a prior (ours); mean: Eq. 5 as written"),
+    "p_detect": F("float", 0.7, min=0.0, exclusive_min=True, max=1.0,
+                  doc="pooled: chance that a source sees a person in its view"),
+    "clutter": F(MapOf(F("float", min=0.0, exclusive_min=True)),
+                 {"laser/blobs": 0.08, "camera_1/fseg": 0.003, "camera_1/hog": 0.006, "camera_2/fseg": 0.003,
+                  "camera_2/hog": 0.006},
+                 doc="pooled: false detections per m^2 and cycle of each likelihood source (measured on training "
+                     "sequences of seed 001's room)"),
+    "looks": F("float", 2.0, min=0.0, exclusive_min=True,
+               doc="pooled: the independent sources whose evidence the weights k_d (summing to 1) share out"),
+    "newcomer": F("float", 0.0003, min=0.0, exclusive_min=True,
+                  doc="pooled: prior odds of a person not tracked before, per kernel area (2 pi Sigma = 0.57 m^2)"),
+    "survival": F("float", 0.6, min=0.0, exclusive_min=True, max=0.999,
+                  doc="pooled: chance that a tracked person is still there a cycle later"),
+    "birth_floor": F("float", 0.01, min=0.0, exclusive_min=True,
+                     doc="least birth density (kernel units): where no detection is, a target can still be removed"),
+    "colour_lambda": F("float", 20.0, min=0.0, doc="lambda of exp(-lambda B^2) (Perez et al. 2002; seed 001: none)"),
+    "alpha": F("float", 0.9, min=0.0, max=1.0, doc="colour model update weight (Eq. 6, Table 1)"),
+    "update_threshold": F("float", 0.24, min=0.0, max=1.0, doc="beta_t: the model follows only closer histograms"),
+    "reid_threshold": F("float", 0.1, min=0.0, max=1.0, doc="beta_o: a new id this close to a gone person's model "
+                                                             "takes their id"),
+    "seed": F("int", 0, doc="the filter's random stream (one run = one draw; seed 001 reports eight)"),
+})
+
+TRACKER_TYPES = {"nnt": NNT, "mht": MHT, "rjmcmc": RJMCMC}
 
 # seed 000 Sec. V-C's static-map filter (pipeline/map_filter.py; a test keeps these defaults equal to the class's)
 MAP_FILTER = Schema({
@@ -487,6 +535,8 @@ MAP_FILTER = Schema({
     "max_occupied": F("float", 0.1, min=0.0, max=1.0,
                       doc="share of the circle's cells that may be occupied (seed 000: rejected when under 90% free; "
                           "0: any occupied cell rejects)"),
+    "obstacles": F("bool", True, doc="the map's obstacles block detections as its walls do (false: walls only, for a "
+                                     "map that leaves out furniture, which moves)"),
 })
 
 # the group stage (pipeline/groups: relations, detection, composition tracking; SPENCER's defaults, a test keeps
@@ -527,7 +577,8 @@ PIPELINE = Schema({
     "fusion_distance": F("float", None, min=0.0,
                          doc="the old spelling of fusion.distance, moved there when the file is loaded"),
     "tracker": F(TRACKER, doc="the tracker (nnt: seed 000's nearest-neighbour Kalman tracker; mht: its "
-                                  "multi-hypothesis baseline)"),
+                                  "multi-hypothesis baseline; rjmcmc: seed 001's particle filter over the laser and "
+                                  "the wall cameras)"),
     "groups": F(GROUP_STAGE, doc="social relations, groups and their tracking (coherent_motion: seed 000's SPENCER "
                                  "group stage)"),
     "map_filter": F(MAP_FILTER, optional=True,

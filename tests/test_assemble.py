@@ -18,6 +18,8 @@ from pipeline.detectors.laser_segments import SegmentDetector
 from pipeline.fusion import NearestFusion
 from pipeline.frames import compose, inverse, transform_points
 from pipeline.tracking.nnt import NearestNeighbourTracker, TrackerParams
+from pipeline.tracking.rjmcmc import (TABLE1_CLUTTER, TABLE1_LIKELIHOOD, TABLE1_PROPOSALS, TABLE1_WEIGHTS,
+                                      RjmcmcTracker)
 from pipeline.types import DetectedPersons, TrackedPersons
 from scenarios import ScenarioError, load_scenario, scenario_from_dict
 from scenarios.format import (COHERENT_MOTION, DETECTOR, DETECTOR_READS, DETECTOR_TYPES, FUSION, FUSION_TYPES,
@@ -107,6 +109,10 @@ def test_the_format_and_assemble_name_the_same_types_with_the_same_defaults():
             signature = inspect.signature(classes[name]).parameters
             assert {k: f.default for k, f in schema.fields.items()} == {k: p.default for k, p in signature.items()}
     assert {k: f.default for k, f in NNT.fields.items()} == asdict(TrackerParams())
+    tables = {"weights": TABLE1_WEIGHTS, "clutter": TABLE1_CLUTTER, "proposal_sources": list(TABLE1_PROPOSALS),
+              "likelihood_sources": list(TABLE1_LIKELIHOOD), "move_probabilities": [0.15, 0.8, 0.02, 0.03]}
+    signature = {k: tables.get(k, p.default) for k, p in inspect.signature(RjmcmcTracker).parameters.items()}
+    assert {k: f.default for k, f in TRACKER_TYPES["rjmcmc"].fields.items()} == signature
     # the methods the format asks of a class of one's own are the interfaces'
     for typed, protocol in ((DETECTOR, Detector), (FUSION, Fusion), (TRACKER, Tracker), (GROUP_STAGE, GroupStage)):
         assert set(typed.methods) == {m for m in vars(protocol) if not m.startswith("_")}
@@ -242,7 +248,7 @@ def test_a_detectors_named_batches_reach_the_fusion_as_sensor_slash_name():
 # --- errors: one, naming the file and the key --------------------------------------------------------------------
 
 @pytest.mark.parametrize("pipeline, key, words", [
-    ({"tracker": {"type": "nn"}}, "pipeline.tracker.type", ["expected one of nnt, mht or module.path:ClassName", "'nn'"]),
+    ({"tracker": {"type": "nn"}}, "pipeline.tracker.type", ["expected one of nnt, mht, rjmcmc or module.path:ClassName", "'nn'"]),
     ({"tracker": {"gate": 9.0}}, "pipeline.tracker.gate",
      ["unknown key; expected one of: type, process_noise, gate_chi2, n_confirm"]),
     ({"tracker": {"type": "test_assemble:EchoTracker", "gain": 2}}, "pipeline.tracker.gain",

@@ -21,6 +21,29 @@ def test_a_vertical_edge_votes_half_each_to_the_bins_beside_zero_degrees():
     assert votes[3, 2].tolist() == pytest.approx([0, 0, 0, 0, 100, 0, 0, 0, 0])
 
 
+def test_the_looked_up_votes_are_the_per_pixel_formula():
+    # the table of orientation_votes against arctan2 per pixel, on random colours
+    rng = np.random.default_rng(1)
+    rgb = rng.integers(0, 256, (40, 50, 3)).astype(np.uint8)
+    # and a tie: pixel (11, 11)'s channels have gradients (4, 3), (3, 4) and (0, 5), the first one's counts
+    rgb[11, 10] = rgb[10, 11] = 0
+    rgb[11, 12], rgb[12, 11] = (4, 3, 0), (3, 4, 5)
+    image = rgb.astype(np.float32)
+    gx, gy = np.zeros_like(image), np.zeros_like(image)
+    gx[:, 1:-1], gy[1:-1] = image[:, 2:] - image[:, :-2], image[2:] - image[:-2]
+    channel = (gx * gx + gy * gy).argmax(axis=-1)[..., None]
+    gx, gy = np.take_along_axis(gx, channel, -1)[..., 0], np.take_along_axis(gy, channel, -1)[..., 0]
+    position = (np.arctan2(gy, gx) % np.pi) * 9 / np.pi - 0.5
+    lower = np.floor(position)
+    expected = np.zeros((40, 50, 9), np.float32)
+    r, c = np.indices((40, 50))
+    expected[r, c, lower.astype(int) % 9] = np.hypot(gx, gy) * (1 - (position - lower))
+    expected[r, c, (lower.astype(int) + 1) % 9] = np.hypot(gx, gy) * (position - lower)
+    np.testing.assert_allclose(orientation_votes(rgb), expected, rtol=1e-5, atol=1e-3)  # float32 rounding
+    np.testing.assert_array_equal(orientation_votes(rgb[:, ::-1]), orientation_votes(rgb[:, ::-1].copy()))
+    with pytest.raises(ValueError, match="expected an 8-bit image"):
+        orientation_votes(image)
+
 def test_cells_sum_the_votes_and_blocks_are_l2hys_normalised():
     votes = np.ones((16, 16, 9), np.float32)
     c = cells(integral(votes), (0.0, 0.0), 8.0, (2, 2))

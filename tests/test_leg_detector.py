@@ -89,6 +89,15 @@ def test_raw_blobs_keep_the_radius_band():
     np.testing.assert_allclose(blobs.position[0, :2], [1.95, 0.5], atol=0.03)
 
 
+def test_blobs_of_too_few_returns_are_left_out_and_come_as_a_named_batch():
+    # a leg 2 m away (about 6 returns at 0.5 degrees) and one 12 m away (2 returns, as a grazing wall's pieces)
+    scan = cast([(2.0, 0.0, 0.06), (12.0, 0.0, 0.06)], range_max=20.0, step=np.radians(0.5))
+    assert len(LegDetector().blobs(scan).position) == 1
+    named = LegDetector(blobs=True).detect(scan)
+    assert set(named) == {"legs", "blobs"} and named["legs"].modality == "laser2d"
+    np.testing.assert_allclose(named["blobs"].position[:, 0], [1.95], atol=0.03)
+
+
 def test_bad_limits_are_named():
     with pytest.raises(ValueError, match="min_width, max_width"):
         LegDetector(min_width=0.3, max_width=0.2)

@@ -33,7 +33,21 @@ def detections(xy, frame="odom"):
 
 def test_the_defaults_are_the_formats():
     signature = inspect.signature(MapFilter).parameters
-    assert {k: f.default for k, f in MAP_FILTER.fields.items()} == {k: signature[k].default for k in MAP_FILTER.fields}
+    own = {k: f.default for k, f in MAP_FILTER.fields.items() if k != "obstacles"}  # obstacles: build_pipeline's
+    assert own == {k: signature[k].default for k in own} and MAP_FILTER.fields["obstacles"].default is True
+
+
+def test_a_map_of_walls_only_keeps_detections_on_its_obstacles():
+    from pipeline.assemble import build_pipeline
+    from scenarios.format import PIPELINE
+    from scenarios.schema import validate
+
+    pillar = [[1.0, 1.0], [1.8, 1.0], [1.8, 1.8], [1.0, 1.8]]
+    plan = {"walls": SQUARE, "obstacles": [pillar]}
+    on = np.array([[1.4, 1.4], [0.02, 2.0], [2.5, 2.5]])  # on the pillar, on the west wall, in the room
+    for obstacles, kept in ((True, [False, False, True]), (False, [True, False, True])):
+        spec = validate({"map_filter": {"obstacles": obstacles}}, PIPELINE, "<test>", "pipeline")
+        assert build_pipeline(spec, ["laser"], plan).map_filter.keep(on).tolist() == kept
 
 
 def test_a_square_rooms_grid_has_its_walls_occupied_and_its_inside_free():

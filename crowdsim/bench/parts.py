@@ -1,5 +1,6 @@
 """``crowdsim bench``: the speed of each hot part (crowd, laser, each of Table II's trackers at 30 and 80 tracks, with
-and without clutter, the group stage at 30 and 80 tracks) and of the whole loop, measured side by side in one run."""
+and without clutter, the group stage at 30 and 80 tracks, seed 001's cooperative system part by part) and of the whole
+loop, measured side by side in one run."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import numpy as np
 from scenarios import load_scenario
 
 from .common import HALL, populated_crowd, rate, write_figures
+from .seed001 import bench_seed001
 
 def bench_crowd(n_agents: int, quick: bool) -> float:
     crowd, _ = populated_crowd(n_agents)
@@ -156,5 +158,13 @@ def run_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
     show("loop_realtime_factor", loop["realtime_factor"], "x real time",
          f"airport loop, 2 lasers @25 Hz + tracker + CLEAR-MOT ({loop['mean_persons_in_range']:.0f} in range)")
     figures["loop"] = loop
+    coop = bench_seed001(quick)
+    show("seed001_legs_ms", coop["legs_ms"], "ms/scan", "seed 001: leg detector and raw blobs, 361 beams")
+    show("seed001_fseg_ms", coop["fseg_ms"], "ms/image", "seed 001: Sigma-Delta foreground people, 640 x 480")
+    show("seed001_hog_ms", coop["hog_ms"], "ms/image", "seed 001: HOG people, 640 x 480, 8 scales")
+    show("seed001_views_ms", coop["views_ms"], "ms/cycle", "seed 001: colour views of both cameras (HSV bins)")
+    show("seed001_filter_ms", coop["filter_ms"], "ms/cycle", "seed 001: RJMCMC filter, all sensors, 4 passers-by")
+    show("seed001_realtime_factor", coop["realtime_factor"], "x real time",
+         f"seed 001: laser + {coop['cameras']} cameras + filter at 5 Hz ({coop['frames_per_s']:.1f} frames/s)", 2)
     write_figures(json_path, figures)
     return figures

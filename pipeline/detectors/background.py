@@ -44,13 +44,14 @@ class SigmaDelta:
             self.spread = np.full(image.shape, self.v_min, np.int16)
             self.frames = []
         m = self.background
-        m += np.sign(image - m).astype(np.int16)
+        m += np.sign(image - m)
         difference = np.abs(m - image)
-        moved = difference != 0
         v = self.spread
-        v[moved] += np.sign(self.amplification * difference[moved] - v[moved]).astype(np.int16)
+        # where the difference is not 0, V moves one step towards N times it (where it is 0, V stays)
+        v += np.sign(self.amplification * difference - v) * (difference != 0)
         np.clip(v, self.v_min, self.v_max, out=v)
         return (difference > v).any(axis=-1)
+
 
 
 def person_blobs(mask: np.ndarray, min_area: int = 150, min_aspect: float = 1.2, max_aspect: float = 5.0,
@@ -58,8 +59,13 @@ def person_blobs(mask: np.ndarray, min_area: int = 150, min_aspect: float = 1.2,
     """Boxes [k, 4] (u0, v0, u1, v1; u1, v1 exclusive) of the foreground blobs of a person's shape: after an opening
     and a closing by squares of the given sizes, the connected blobs of at least ``min_area`` pixels whose box is
     ``min_aspect`` to ``max_aspect`` times as high as wide."""
-    clean = ndimage.binary_opening(mask, np.ones((opening, opening), bool))
-    clean = ndimage.binary_closing(clean, np.ones((closing, closing), bool))
+    # opening and closing by squares as separable minimum and maximum filters (outside the image counts as
+    # background), a binary_opening and binary_closing's result at a fraction of their cost
+    clean = mask.view(np.uint8)
+    for size, first, second in ((opening, ndimage.minimum_filter, ndimage.maximum_filter),
+                                (closing, ndimage.maximum_filter, ndimage.minimum_filter)):
+        clean = second(first(clean, size, mode="constant", cval=0), size, mode="constant", cval=0)
+    clean = clean.view(bool)
     labels, n = ndimage.label(clean)
     if not n:
         return np.zeros((0, 4), np.int64)

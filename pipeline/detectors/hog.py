@@ -13,6 +13,7 @@ same way, so the classifier learns these features.
 
 from __future__ import annotations
 
+import functools
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,39 +29,61 @@ L2HYS_CLIP = 0.2
 MODELS_DIR = Path(__file__).parent / "models"
 MODEL_FILE = "hog_person.npz"  # `crowdsim experiment train-hog` makes it
 MODEL_FORMAT = "crowdsim-hog/1"
+GRADIENT_MAX = 255  # of a centred difference of 8-bit channels
 
 
 def orientation_votes(rgb: np.ndarray) -> np.ndarray:
     """[h, w, 9] float32: each pixel's gradient magnitude split between its two nearest orientation bins (unsigned,
-    0-180 degrees; bin k centred at (k + 0.5) 20 degrees), the gradient from the channel where it is largest."""
-    image = rgb.astype(np.float32)
-    gx = np.zeros_like(image)
-    gy = np.zeros_like(image)
-    gx[:, 1:-1] = image[:, 2:] - image[:, :-2]
-    gy[1:-1] = image[2:] - image[:-2]
-    magnitude2 = gx * gx + gy * gy
-    channel = magnitude2.argmax(axis=-1)
-    pick = np.arange(channel.size) * 3 + channel.ravel()  # flat index of each pixel's strongest channel
-    gx, gy = gx.ravel()[pick], gy.ravel()[pick]
-    magnitude = np.sqrt(magnitude2.ravel()[pick])
+    0-180 degrees; bin k centred at (k + 0.5) 20 degrees), the gradient from the channel where it is largest.
+
+    ``rgb`` is 8-bit, so a gradient (gx, gy) is a pair of integers in [-255, 255]: its votes are looked up in a table
+    computed once with the same float32 arithmetic (``_vote_table``), the same numbers without an arctan2 per pixel."""
+    if rgb.dtype != np.uint8:
+        raise ValueError(f"rgb: expected an 8-bit image; got {rgb.dtype}")
+    h, w = rgb.shape[:2]
+    image = rgb.reshape(h, w * 3)  # channels interleaved: pixel x's channel c in column 3 x + c
+    gx = np.zeros((h, w * 3), np.int16)
+    gy = np.zeros((h, w * 3), np.int16)
+    np.subtract(image[:, 6:], image[:, :-6], out=gx[:, 3:-3], dtype=np.int16)
+    np.subtract(image[2:], image[:-2], out=gy[1:-1], dtype=np.int16)
+    strength = (np.multiply(gx, gx, dtype=np.int32) + np.multiply(gy, gy, dtype=np.int32)).reshape(h, w, 3)
+    row = (np.multiply(gy, 2 * GRADIENT_MAX + 1, dtype=np.int32) + gx).reshape(h, w, 3)  # table row less its offset
+    # the row of the strongest channel, the first of equals (as argmax)
+    pick = np.where(strength[..., 1] > strength[..., 0], row[..., 1], row[..., 0])
+    pick = np.where(strength[..., 2] > np.maximum(strength[..., 0], strength[..., 1]), row[..., 2], pick)
+    pick += GRADIENT_MAX * (2 * GRADIENT_MAX + 1) + GRADIENT_MAX
+    return np.take(_vote_table(), pick, axis=0)
+
+
+@functools.cache
+def _vote_table() -> np.ndarray:
+    """[511 * 511, 9] float32, read-only: the votes of the gradient (gx, gy), integers in [-255, 255], in row
+    (gy + 255) 511 + gx + 255."""
+    g = np.arange(-GRADIENT_MAX, GRADIENT_MAX + 1, dtype=np.float32)
+    gy, gx = np.repeat(g, g.size), np.tile(g, g.size)
+    magnitude = np.sqrt(gx * gx + gy * gy)
     position = (np.arctan2(gy, gx) % np.pi) * (ORIENTATIONS / np.pi) - 0.5  # in bin widths from bin 0's centre
     lower = np.floor(position)
     upper_share = position - lower
     lower = lower.astype(np.int64) % ORIENTATIONS
-    votes = np.zeros(channel.shape + (ORIENTATIONS,), np.float32)
-    flat = votes.reshape(-1)
-    base = np.arange(channel.size) * ORIENTATIONS
-    flat[base + lower] = magnitude * (1 - upper_share)
-    flat[base + (lower + 1) % ORIENTATIONS] = magnitude * upper_share  # the other bin of the same pixel
-    return votes
+    table = np.zeros((g.size * g.size, ORIENTATIONS), np.float32)
+    gradient = np.arange(len(table))
+    table[gradient, lower] = magnitude * (1 - upper_share)
+    table[gradient, (lower + 1) % ORIENTATIONS] = magnitude * upper_share  # the other bin of the same gradient
+    table.flags.writeable = False
+    return table
 
 
 def integral(votes: np.ndarray) -> np.ndarray:
-    """[h + 1, w + 1, 9] float64 sums of the votes above and left of each pixel corner."""
-    out = np.zeros((votes.shape[0] + 1, votes.shape[1] + 1, votes.shape[2]))
+    """[h + 1, w + 1, 9] float64 sums of the votes above and left of each pixel corner (float64: a cell is the
+    difference of corner sums far larger than it). Along the rows by cumsum, then down the image row by row, several
+    times faster than numpy's cumsum along a leading axis."""
+    h, w, n = votes.shape
+    out = np.zeros((h + 1, w + 1, n))
     out[1:, 1:] = votes
-    np.cumsum(out, axis=0, out=out)
     np.cumsum(out, axis=1, out=out)
+    for v in range(1, h + 1):
+        out[v] += out[v - 1]
     return out
 
 
@@ -70,7 +93,7 @@ def cells(table: np.ndarray, origin: tuple[float, float], size: float, shape: tu
     h, w = table.shape[0] - 1, table.shape[1] - 1
     v = np.clip(np.rint(origin[1] + size * np.arange(shape[0] + 1)).astype(np.int64), 0, h)
     u = np.clip(np.rint(origin[0] + size * np.arange(shape[1] + 1)).astype(np.int64), 0, w)
-    corner = table[v][:, u]
+    corner = table[v[:, None], u]
     return corner[1:, 1:] - corner[:-1, 1:] - corner[1:, :-1] + corner[:-1, :-1]
 
 
@@ -78,9 +101,10 @@ def blocks(cell_histograms: np.ndarray) -> np.ndarray:
     """[rows - 1, cols - 1, 36]: each 2 x 2 block of cells, L2-Hys normalised (L2, clipped at 0.2, L2 again)."""
     c = cell_histograms
     b = np.concatenate([c[:-1, :-1], c[:-1, 1:], c[1:, :-1], c[1:, 1:]], axis=-1)
-    b = b / np.sqrt((b * b).sum(axis=-1, keepdims=True) + 1e-6)
-    b = np.minimum(b, L2HYS_CLIP)
-    return b / np.sqrt((b * b).sum(axis=-1, keepdims=True) + 1e-6)
+    b /= np.sqrt(np.einsum("...k,...k->...", b, b) + 1e-6)[..., None]
+    np.minimum(b, L2HYS_CLIP, out=b)
+    b /= np.sqrt(np.einsum("...k,...k->...", b, b) + 1e-6)[..., None]
+    return b
 
 
 def window_features(table: np.ndarray, box: np.ndarray) -> np.ndarray:
@@ -113,13 +137,17 @@ class HogModel:
         rows, cols = grid[0] - WINDOW_CELLS[0] + 1, grid[1] - WINDOW_CELLS[1] + 1
         if rows <= 0 or cols <= 0:
             return np.zeros((0, 0))
-        b = blocks(cells(table, (0.0, 0.0), size, grid))
-        weight = self.weight.reshape(WINDOW_CELLS[0] - 1, WINDOW_CELLS[1] - 1, -1)
-        score = np.full((rows, cols), self.bias)
-        for i in range(weight.shape[0]):
-            for j in range(weight.shape[1]):
-                score += b[i:i + rows, j:j + cols] @ weight[i, j]
-        return score
+        b = blocks(cells(table, (0.0, 0.0), size, grid))  # [rows + 14, cols + 6, 36]
+        # Each block against the weights of each of the 15 x 7 block places of a window. b stays 3-d, so numpy makes
+        # one product per block row, small enough for OpenBLAS to keep to one thread (one large product goes
+        # multi-threaded, several times slower on a busy machine).
+        places = (WINDOW_CELLS[0] - 1, WINDOW_CELLS[1] - 1)
+        part = b @ self.weight.reshape(-1, b.shape[-1]).T.astype(np.float64)  # [rows + 14, cols + 6, 105]
+        # window (r, c) sums part[r + i, c + j, 7 i + j] over its block places (i, j): a strided view of those
+        sr, sc, sk = part.strides
+        windows = np.lib.stride_tricks.as_strided(part, (rows, cols) + places, (sr, sc, sr + places[1] * sk, sc + sk),
+                                                  writeable=False)
+        return self.bias + np.einsum("rcij->rc", windows)
 
     def detect(self, rgb: np.ndarray, scales: np.ndarray, overlap: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
         """Person boxes [k, 4] (u0, v0, u1, v1 of the person, 3/4 of the window's height) and scores [k] over the

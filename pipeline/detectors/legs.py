@@ -38,8 +38,8 @@ class LegDetector:
     def __init__(self, jump_distance: float = 0.08, min_points: int = 3, min_width: float = 0.05,
                  max_width: float = 0.15, min_angle_deg: float = 90.0, max_angle_deg: float = 160.0,
                  max_angle_sd_deg: float = 30.0, sharp_angle_deg: float = 60.0, pair_distance: float = 0.5,
-                 single_legs: bool = True, blob_min_radius: float = 0.03, blob_max_radius: float = 0.3,
-                 position_variance: float = 0.05):
+                 single_legs: bool = True, blobs: bool = False, blob_min_radius: float = 0.03,
+                 blob_max_radius: float = 0.3, position_variance: float = 0.05):
         if not 0 < min_width <= max_width:
             raise ValueError(f"min_width, max_width: expected 0 < min_width <= max_width, not {min_width}, {max_width}")
         if not min_angle_deg <= max_angle_deg:
@@ -49,6 +49,7 @@ class LegDetector:
         self.angle = np.radians([min_angle_deg, max_angle_deg])
         self.max_angle_sd, self.sharp_angle = np.radians(max_angle_sd_deg), np.radians(sharp_angle_deg)
         self.pair_distance, self.single_legs = pair_distance, single_legs
+        self.with_blobs = blobs
         self.blob_radius = (blob_min_radius, blob_max_radius)
         self.position_variance = position_variance
         self.reset()
@@ -70,19 +71,22 @@ class LegDetector:
                 & (least >= self.sharp_angle))
         return arc_centres(seg.centroid[keep], width[keep])
 
-    def detect(self, scan: LaserScan) -> DetectedPersons:
-        people = pair_legs(self.legs(scan), self.pair_distance, self.single_legs)
-        return self._persons(scan, people, "laser2d")
+    def detect(self, scan: LaserScan) -> DetectedPersons | dict[str, DetectedPersons]:
+        """The persons; with ``blobs``, the named batches {"legs": the persons, "blobs": the raw blobs}."""
+        people = self._persons(scan, pair_legs(self.legs(scan), self.pair_distance, self.single_legs), "laser2d")
+        return {"legs": people, "blobs": self.blobs(scan)} if self.with_blobs else people
 
     def blobs(self, scan: LaserScan) -> DetectedPersons:
-        """Seed 001's raw-blob observations: the centroids of the blobs of any shape whose half-width is within the
-        radius band (no person is formed: a person may give one blob or two)."""
+        """Seed 001's raw-blob observations: the centroids of the blobs of any shape with ``min_points`` returns or
+        more whose half-width is within the radius band (no person is formed: a person may give one blob or two).
+        Fewer returns are mostly pieces of a wall seen at a grazing angle, whose returns are farther apart than
+        ``jump_distance``."""
         seg = jump_segments(scan, self.jump_distance)
         if not len(seg.start):
             return self._persons(scan, np.zeros((0, 2)), "laser_blobs")
         first, last = seg.points[seg.start], seg.points[seg.start + seg.count - 1]
         radius = np.linalg.norm(last - first, axis=1) / 2
-        keep = (radius >= self.blob_radius[0]) & (radius <= self.blob_radius[1])
+        keep = (seg.count >= self.min_points) & (radius >= self.blob_radius[0]) & (radius <= self.blob_radius[1])
         return self._persons(scan, seg.centroid[keep], "laser_blobs")
 
     def _persons(self, scan: LaserScan, xy: np.ndarray, modality: str) -> DetectedPersons:
