@@ -399,6 +399,7 @@ class Simulation:
             self._next_wall[k] += camera.period
             image = camera.capture(stamp)
             image.pose = self._camera_in_odom(image.frame)
+            image.robot_position = self.robot.odom_pose[:2].copy()
             self._detect(image)
             self._pending_camera.append(image)
             self._latest_seen[image.frame] = (stamp, agents.id, _on(agents.id, image.ids, image.visible_fraction),

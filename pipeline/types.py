@@ -81,7 +81,9 @@ class CameraFrame:
     would show unoccluded, ``visible_fraction`` [n] of its unoccluded pixels that show.
 
     The calibration, what a camera detector may use: ``camera_matrix`` (3x3 K) and ``pose``, the optical frame in the
-    tracking frame (4x4) as the robot's localisation places the fixed camera (the loop fills it in).
+    tracking frame (4x4) as the robot's localisation places the fixed camera (the loop fills it in); and
+    ``robot_position``, the robot's (x, y) in the tracking frame by its odometry, so that a detector can mask the robot
+    out.
     """
 
     stamp: float
@@ -94,6 +96,7 @@ class CameraFrame:
     visible_fraction: np.ndarray
     camera_matrix: np.ndarray | None = None
     pose: np.ndarray | None = None
+    robot_position: np.ndarray | None = None
 
 
 @dataclass

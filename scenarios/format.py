@@ -382,6 +382,9 @@ WALL_CAMERA_DETECTOR = Schema({
     "min_area": F("int", 150, min=1, doc="pixels, least foreground blob"),
     "min_aspect": F("float", 1.2, min=0.0, doc="least height / width of a foreground blob"),
     "max_aspect": F("float", 5.0, min=0.0, doc="largest height / width of a foreground blob"),
+    "robot_radius": F("float", 0.5, min=0.0,
+                      doc="m, a detection whose floor point is this near the robot is the robot, masked out (Rackham's "
+                          "0.26 m and a margin for the foot point's error)"),
     "position_variance": F("float", 0.09, min=0.0, exclusive_min=True,
                            doc="m^2 along the floor (seed 001 Table 1: Sigma = diag(0.09, 0.09))"),
 })

@@ -42,6 +42,17 @@ def test_a_foreground_person_stands_where_its_feet_meet_the_floor():
     np.testing.assert_allclose(odom.covariance[0, :2, :2], 0.09 * np.eye(2), atol=1e-9)
 
 
+def test_the_robot_is_masked_out():
+    det = WallCameraDetector(hog=False, bootstrap=3, robot_radius=0.5)
+    for k in range(3):
+        det.detect(image(0.2 * k))
+    frame = image(0.6, (70, 70, 85, 110))  # feet 4 m ahead, 0.1 m to the left (above)
+    frame.robot_position = np.array([4.3, 0.1])  # the robot 0.3 m behind them: what the camera sees is the robot
+    assert len(det.detect(frame)["fseg"].position) == 0
+    frame.robot_position = np.array([4.6, 0.1])  # 0.6 m off: a person beside the robot
+    assert len(det.detect(frame)["fseg"].position) == 1
+
+
 def test_it_needs_colour_and_calibration():
     frame = image(0.0)
     frame.pose = None

@@ -3,7 +3,8 @@ Sigma-Delta background subtraction (``fseg``) and HOG windows (``hog``), each a 
 (the middle of its bottom edge) projected to the floor through the camera's calibration.
 
 The two kinds come as named batches (``{"fseg": ..., "hog": ...}``), so a fusing tracker can weigh them apart, as
-seed 001's Table 1 does (k_d 0.22 and 0.2 per camera). A detection's point is on the floor (z = 0 in the tracking
+seed 001's Table 1 does (k_d 0.22 and 0.2 per camera). A detection whose floor point is within ``robot_radius`` of
+the robot (its odometry position, ``CameraFrame.robot_position``) is the robot, masked out as seed 001's are. A detection's point is on the floor (z = 0 in the tracking
 frame), given in the camera's optical frame as every detector gives its own frame's; its covariance is
 ``position_variance`` along the floor (seed 001 Table 1: Sigma = diag(0.09, 0.09) m^2).
 """
@@ -26,7 +27,7 @@ class WallCameraDetector:
 
     def __init__(self, foreground: bool = True, hog: bool = True, model: str | None = None,
                  hog_scales: list = HOG_SCALES, bootstrap: int = 15, min_area: int = 150, min_aspect: float = 1.2,
-                 max_aspect: float = 5.0, position_variance: float = 0.09):
+                 max_aspect: float = 5.0, robot_radius: float = 0.5, position_variance: float = 0.09):
         if not (foreground or hog):
             raise ValueError("foreground, hog: expected at least one of them on")
         self.foreground, self.hog = foreground, hog
@@ -34,6 +35,7 @@ class WallCameraDetector:
         self.hog_scales = np.asarray(hog_scales, float)
         self.background = SigmaDelta(bootstrap=bootstrap)
         self.blob_limits = {"min_area": min_area, "min_aspect": min_aspect, "max_aspect": max_aspect}
+        self.robot_radius = robot_radius
         self.position_variance = position_variance
         self.reset()
 
@@ -59,6 +61,8 @@ class WallCameraDetector:
         feet = np.column_stack([(boxes[:, 0] + boxes[:, 2]) / 2, boxes[:, 3]]) if len(boxes) else np.zeros((0, 2))
         xy = image_to_floor(frame.camera_matrix, frame.pose, feet)
         seen = np.isfinite(xy).all(axis=1)
+        if frame.robot_position is not None:  # the robot masked out (seed 001 Sec. 4.2): no person stands in it
+            seen &= ~(np.hypot(*(xy - frame.robot_position).T) < self.robot_radius)
         xy, confidence = xy[seen], np.asarray(confidence, float)[seen]
         n = len(xy)
         rot, origin = frame.pose[:3, :3], frame.pose[:3, 3]

@@ -30,13 +30,14 @@ estimate is the configuration they hold most often (Alg. 1 line 16).
 * **Likelihood.** Kernels are g(x; z) = exp(-|x - z|^2 / (2 * 0.09)) (Table 1's Sigma, peak 1: Eq. 2 and 3 take 1
   minus them, which a normalised density, peaking at 1.77 m^-2, would make negative). ``likelihood``:
 
-  - ``"pooled"`` (ours, the default): each source's detections as a Poisson process of clutter (``clutter`` per m^2)
-    and of targets (each seen with ``p_detect``, at N(x, Sigma)), the sources pooled log-linearly with the weights
-    k_d: log pi_D = sum_d w_d [sum_j log(1 + gain sum_i g(z_dj; x_i)) - p_detect sum_i v_d(x_i)], gain = p_detect
-    N(0; Sigma) / clutter, v_d(x) = 1 where source d can see a target at x (a camera: the whole box of an average
-    person in its image; the laser: everywhere), w_d = ``looks`` k_d (the weights of a mode sum to 1 and share out
-    the evidence of ``looks`` sources: five, seed 001's laser and two kinds per camera). A second target on a
-    detection gains little and pays the miss cost and Eq. 4, so duplicates do not pay.
+  - ``"pooled"`` (ours, the default): each source's detections as a Poisson process of clutter (``clutter``, per m^2
+    and cycle, per source) and of targets (each seen with ``p_detect``, at N(x, Sigma)), the sources pooled
+    log-linearly with the weights k_d: log pi_D = sum_d w_d [sum_j log(1 + gain_d sum_i g(z_dj; x_i)) - p_detect
+    sum_i v_d(x_i)], gain_d = p_detect N(0; Sigma) / clutter_d, v_d(x) = 1 where source d can see a target at x (a
+    camera: the whole box of an average person in its image; the laser: everywhere), w_d = ``looks`` k_d (the
+    weights of a mode sum to 1 and share out the evidence of ``looks`` independent sources: 2, chosen on training
+    sequences; seed 001's five kinds of detection are far from independent). A second target on a detection gains
+    little and pays the miss cost and Eq. 4, so duplicates do not pay.
     With it, each target has a prior against its absence (``_prior``): ``newcomer`` (odds per kernel area) for a
     target not tracked in the last cycle; r s / (1 - r s) times its predictive for one that the share r of the last
     cycle's particles held (s: ``survival``).
