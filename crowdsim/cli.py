@@ -266,6 +266,22 @@ def _cmd_experiment(args) -> int:
         print(write_directory(out, lambda tmp: write(tmp, results, seeds)))
         print(f"\n{out / 'groups.md'}, groups.json, groups.png")
         return 0
+    if args.what == "hog-vs-opencv":
+        try:
+            import cv2  # noqa: F401
+        except ImportError:
+            raise UsageError('experiment hog-vs-opencv: needs OpenCV: pip install -e ".[compare]"') from None
+        from .experiments.train_hog import compare_opencv
+
+        r = compare_opencv(workers=args.workers)
+        print(f"HOG person detectors on held-out seeds {r['test_seeds']} ({r['images']} images, "
+              f"{r['ours_peak']['persons']} persons), a detection right at IoU 0.5:\n")
+        print("| detector | F1 | precision | recall |\n|---|---|---|---|")
+        for label, key in (("ours, at its threshold (validation seeds)", "ours_at_threshold"),
+                           ("ours, at its best threshold here", "ours_peak"),
+                           ("OpenCV's INRIA-trained, at its best threshold here", "opencv_peak")):
+            print(f"| {label} | {r[key]['f1']:.3f} | {r[key]['precision']:.3f} | {r[key]['recall']:.3f} |")
+        return 0
     if args.what == "seed001":
         from .experiments.seed001 import experiment, write
 
@@ -273,6 +289,11 @@ def _cmd_experiment(args) -> int:
             raise UsageError(f"--runs and --workers: expected at least 1, got {args.runs} and {args.workers}")
         out = Path(args.out) if args.out else Path("runs") / f"seed001-{time.strftime('%Y%m%d-%H%M%S')}"
         check_out_dir(out)
+        if args.tune:
+            from .experiments.seed001 import tune, write_tuning
+
+            print(write_directory(out, lambda tmp: write_tuning(tmp, tune(workers=args.workers))))
+            return 0
         results = experiment(args.runs, workers=args.workers)
         print(write_directory(out, lambda tmp: write(tmp, results)))
         print(f"\n{out / 'seed001.md'}, seed001.json, seed001.png")
@@ -549,7 +570,7 @@ def build_parser() -> argparse.ArgumentParser:
                                           "`experiment train-detector` the laser_learned segment classifiers, "
                                           "`experiment train-relations` the group stage's relation classifiers")
     p.add_argument("what", choices=("ppo", "train-detector", "table2", "tune", "train-relations", "groups",
-                                     "train-hog", "seed001"),
+                                     "train-hog", "seed001", "hog-vs-opencv"),
                    help="ppo: stable-baselines3 PPO on crowdsim/Navigate-v0 with the tracks observation, against "
                         "the random policy (needs [rl]); train-detector: AdaBoost and random-forest segment "
                         "classifiers on labelled airport scans, scored against laser_segments on held-out seeds "
@@ -560,7 +581,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "each classifier against SPENCER's, each linkage, thresholds, tracker against true tracks; "
                         "train-hog: the wall cameras' HOG person detector on rendered images of seed 001's room "
                         "(needs [train]); seed001: seed 001's Tables 2-6, its RJMCMC filter over the laser and the "
-                        "wall cameras in four modes on sequences I-III, its claims checked")
+                        "wall cameras in four modes on sequences I-III, its claims checked; hog-vs-opencv: our HOG "
+                        "model against OpenCV's INRIA-trained one on held-out images (needs [compare])")
     p.add_argument("--minutes", type=float, default=30.0, help="wall-clock training budget (default 30)")
     p.add_argument("--envs", type=int, default=8, help="environments stepped together (default 8)")
     p.add_argument("--people", type=int, default=10, help="people per environment (default 10)")
@@ -577,6 +599,9 @@ def build_parser() -> argparse.ArgumentParser:
                                                   "(default: the scenario's; the others: 60)")
     p.add_argument("--runs", type=int, default=8, help="seed001: filter runs per sequence and mode (default 8, as "
                                                        "seed 001's)")
+    p.add_argument("--tune", action="store_true", help="seed001: choose the filter's pooled-likelihood parameters on "
+                                                       "training sequences (rooms 3 and 2 at seeds 4000, 4001) in "
+                                                       "place of the tables: tune.md, tune.json")
     p.add_argument("--trials", type=int, default=50, help="tune: trials (default 50)")
     p.add_argument("--storage", help="tune: an Optuna storage to keep and resume the study, e.g. sqlite:///study.db")
     p.add_argument("--quick", action="store_true", help="train-detector: 4 short training seeds, 1 validation and "

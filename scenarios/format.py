@@ -490,10 +490,12 @@ RJMCMC = Schema({
                  doc="k_d per detection source (`sensor/batch`, as the detectors name their batches; Table 1)"),
     "proposal_sources": F(ListOf(F("str")), ["laser/legs", "camera_1/fseg", "camera_1/hog", "camera_2/fseg",
                                              "camera_2/hog"],
-                          doc="the sources where targets are born (Eq. 2: the leg detector's persons and the cameras')"),
+                          doc="the sources where targets are born (Eq. 2: the leg detector's persons and the "
+                              "cameras')"),
     "likelihood_sources": F(ListOf(F("str")), ["laser/blobs", "camera_1/fseg", "camera_1/hog", "camera_2/fseg",
                                                "camera_2/hog"],
-                            doc="the sources the likelihood weighs (Eq. 5: the laser's raw blobs l_b and the cameras')"),
+                            doc="the sources the likelihood weighs (Eq. 5: the laser's raw blobs l_b and the "
+                                "cameras')"),
     "move_probabilities": F(ListOf(F("float", min=0.0, max=1.0), min_items=4), [0.15, 0.8, 0.02, 0.03],
                             doc="q_m of add, update, remove, swap (Table 1)"),
     "step_variance": F("float", 0.09, min=0.0, exclusive_min=True,

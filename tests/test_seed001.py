@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from crowdsim.experiments.seed001 import (COLUMNS, MODES, PUBLISHED, SEQUENCES, IdSwaps, RecordedFrame, claims,
-                                          replay, report)
+                                          coordinate_search, replay, report)
 from evaluation.clearmot import ClearMot
 from pipeline.types import DetectedPersons
 
@@ -87,3 +87,25 @@ def test_report_puts_ours_beside_the_published():
     assert "Table 5: all sensors" in text and "| I | " in text
     assert "0.500 +- 0.000 / 0.841" in text  # all sensors, sequence I: ours / seed 001's MOTA
     assert "Table 6: id swaps" in text and text.count("DOES NOT HOLD") == 3  # (a), (b), (c) on flat numbers
+
+
+def test_coordinate_search_keeps_a_change_only_past_the_margin():
+    # a bowl with its bottom at (a 2, b 30); a 3 gains 0.004 over a 2: less than the margin, so a stays at 2
+    def score(p):
+        return -((p["a"] - 2) ** 2) * 0.004 * (1 if p["a"] < 2 else 0) - abs(p["b"] - 30) / 10 + 0.004 * (p["a"] == 3)
+
+    best, top, trials = coordinate_search(score, {"a": 2, "b": 10}, {"a": [1, 2, 3], "b": [10, 20, 30]}, 0.005)
+    assert best == {"a": 2, "b": 30} and top == pytest.approx(0.0)
+    assert [t[0] for t in trials] == [{"a": 2, "b": 10}, {"a": 1, "b": 10}, {"a": 3, "b": 10}, {"a": 2, "b": 20},
+                                      {"a": 2, "b": 30}]
+
+
+def test_the_command_refuses_bad_runs_and_a_used_out(tmp_path, capsys):
+    from crowdsim.cli import main
+
+    assert main(["experiment", "seed001", "--runs", "0"]) == 2
+    assert "--runs and --workers: expected at least 1, got 0 and 2" in capsys.readouterr().err
+    (tmp_path / "kept").write_text("x")
+    assert main(["experiment", "seed001", "--out", str(tmp_path)]) == 2
+    assert "already exists and is not empty" in capsys.readouterr().err
+    assert (tmp_path / "kept").read_text() == "x"

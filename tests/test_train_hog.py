@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from crowdsim.experiments.train_hog import SCALES, random_windows, save, stream_scenario
+from crowdsim.experiments.train_hog import SCALES, peak_f1, random_windows, save, stream_scenario
 from pipeline.detectors.hog import PERSON_SHARE, HogModel, load_model
 
 
@@ -24,6 +24,18 @@ def test_random_windows_lie_inside_the_image_with_a_persons_shape():
     assert (boxes[:, 1] - margin_v >= 0).all() and (boxes[:, 3] + margin_v <= 480).all()
     assert (boxes[:, 0] - width / 2 >= 0).all() and (boxes[:, 2] + width / 2 <= 640).all()
     assert height.min() >= 96 * SCALES.min() - 1e-9
+
+
+def test_peak_f1_by_hand():
+    person = np.array([[0.0, 0.0, 10.0, 20.0]])
+    hit, near, miss = [0.0, 0.0, 10.0, 20.0], [0.0, 5.0, 10.0, 25.0], [50.0, 0.0, 60.0, 20.0]  # IoU 1, 0.6, 0
+    detections = [(np.array([hit, miss]), np.array([0.9, 0.95])),  # a false alarm scores above the hit
+                  (np.array([near, hit]), np.array([0.8, 0.2])),  # two on one person: the second is a false alarm
+                  (np.array([miss]), np.array([0.1]))]
+    persons = [person, person, np.zeros((0, 4))]
+    threshold, best = peak_f1(detections, persons)
+    # by score: 0.95 no, 0.9 yes, 0.8 yes (IoU 0.6), 0.2 no, 0.1 no; at 0.8: precision 2/3, recall 2/2, F1 0.8
+    assert threshold == 0.8 and best == pytest.approx({"f1": 0.8, "precision": 2 / 3, "recall": 1.0, "persons": 2})
 
 
 def test_a_saved_model_keeps_its_numbers_and_a_bad_file_is_named(tmp_path):

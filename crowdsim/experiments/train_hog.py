@@ -12,6 +12,8 @@ at least ``MIN_HEIGHT`` pixels high, and its mirror image (Dalal & Triggs add re
 random windows an image at random scales, overlapping no person's box by more than 0.2; then one round of hard
 negatives (Dalal & Triggs): an image's ``NEGATIVES`` best-scored windows of the first model (above -1) that overlap no
 person by more than 0.3.
+Comparison (``compare_opencv``, ``crowdsim experiment hog-vs-opencv``): our model and OpenCV's INRIA-trained default
+people detector on held-out seeds 4300-4301, each at its peak F1 there, ours also at its own threshold.
 Classifier: scikit-learn's LinearSVC (C = 0.01, Dalal & Triggs's soft linear SVM), needs the ``[train]`` extra; saved
 as plain arrays. Threshold: the score of peak F1 on the validation seeds, a detection right at intersection over
 union 0.5 or more with a person's visible box.
@@ -27,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.detectors.hog import (MODEL_FILE, MODEL_FORMAT, MODELS_DIR, PERSON_SHARE, WINDOW_CELLS, HogModel,
-                                    box_iou, integral, orientation_votes, window_features)
+                                    box_iou, integral, non_maximum_suppression, orientation_votes, window_features)
 from pipeline.detectors.wall_camera import HOG_SCALES
 from scenarios import scenario_from_dict
 from scenarios.loader import read_raw, resolve
@@ -35,7 +37,7 @@ from scenarios.loader import read_raw, resolve
 from .seeds import map_seeds
 
 SCENARIO = "seed001_room_1"
-TRAIN_SEED, VALIDATION_SEEDS = 4100, (4200, 4201)
+TRAIN_SEED, VALIDATION_SEEDS, TEST_SEEDS = 4100, (4200, 4201), (4300, 4301)
 DURATION, START, EVERY = 60.0, 10.0, 5  # s run, s before the first image kept, tracker cycles between images kept
 SEQUENCE_IDS = 4  # the sequences' people: ids 1..4
 MIN_HEIGHT, MIN_VISIBLE = 64, 0.7
@@ -138,9 +140,14 @@ def peak_f1_threshold(model: HogModel, data: Images) -> tuple[float, dict]:
     """The score threshold of peak F1 over the images (a detection right at IoU 0.5 or more with a person's visible
     box, each person matched once, best scores first), and the scores there."""
     low = HogModel(model.weight, model.bias, -1.0)
+    return peak_f1([low.detect(rgb, SCALES) for rgb in data.rgb], data.boxes)
+
+
+def peak_f1(detections: list, persons: list) -> tuple[float, dict]:
+    """Over images with ``detections`` (boxes, scores) and ``persons`` (visible boxes): the threshold of peak F1 (a
+    detection right at IoU 0.5 or more with a person not yet matched, best scores first) and the scores there."""
     scores, hits, n_persons = [], [], 0
-    for rgb, boxes in zip(data.rgb, data.boxes):
-        found, s = low.detect(rgb, SCALES)
+    for (found, s), boxes in zip(detections, persons):
         n_persons += len(boxes)
         taken = np.zeros(len(boxes), bool)
         for k in np.argsort(-s).tolist():
@@ -161,6 +168,39 @@ def peak_f1_threshold(model: HogModel, data: Images) -> tuple[float, dict]:
     best = int(f1.argmax())
     return float(np.array(scores)[order][best]), {"f1": float(f1[best]), "precision": float(precision[best]),
                                                    "recall": float(recall[best]), "persons": n_persons}
+
+
+def opencv_people(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """OpenCV's default people detector (Dalal & Triggs's INRIA-trained HOG and linear SVM) on our scales (1.2 apart,
+    8-pixel steps), every window above -1 with its person box as ours (3/4 of the window's height, its middle half
+    across), then our non-maximum suppression: person boxes and scores."""
+    import cv2
+
+    hog = cv2.HOGDescriptor()
+    hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+    windows, scores = hog.detectMultiScale(np.ascontiguousarray(rgb[..., ::-1]), hitThreshold=-1.0,
+                                           winStride=(8, 8), scale=1.2, groupThreshold=0)
+    windows, scores = np.asarray(windows, float).reshape(-1, 4), np.asarray(scores, float).reshape(-1)
+    u, v, w, h = windows.T
+    boxes = np.column_stack([u + w / 4, v + h * (1 - PERSON_SHARE) / 2, u + 3 * w / 4, v + h * (1 + PERSON_SHARE) / 2])
+    keep = non_maximum_suppression(boxes, scores, 0.5)
+    return boxes[keep], scores[keep]
+
+
+def compare_opencv(duration: float = DURATION, workers: int = 2) -> dict:
+    """Our shipped model against OpenCV's INRIA-trained one on the held-out ``TEST_SEEDS``: each one's peak F1 (its
+    best threshold there) and ours at its own threshold (chosen on the validation seeds)."""
+    from pipeline.detectors.hog import load_model
+
+    data = map_seeds(collect, list(TEST_SEEDS), duration, workers=workers, desc="hog vs opencv")
+    test = Images(*(sum((getattr(d, f) for d in data), []) for f in ("rgb", "boxes", "positive")))
+    ours = load_model()
+    low = HogModel(ours.weight, ours.bias, -1.0)
+    found = [low.detect(rgb, SCALES) for rgb in test.rgb]
+    at_threshold = [(b[s > ours.threshold], s[s > ours.threshold]) for b, s in found]
+    return {"test_seeds": list(TEST_SEEDS), "images": len(test.rgb),
+            "ours_peak": peak_f1(found, test.boxes)[1], "ours_at_threshold": peak_f1(at_threshold, test.boxes)[1],
+            "opencv_peak": peak_f1([opencv_people(rgb) for rgb in test.rgb], test.boxes)[1]}
 
 
 def train(n_seeds: int = 10, workers: int = 2, duration: float = DURATION) -> tuple[HogModel, dict]:

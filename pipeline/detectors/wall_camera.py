@@ -4,9 +4,10 @@ Sigma-Delta background subtraction (``fseg``) and HOG windows (``hog``), each a 
 
 The two kinds come as named batches (``{"fseg": ..., "hog": ...}``), so a fusing tracker can weigh them apart, as
 seed 001's Table 1 does (k_d 0.22 and 0.2 per camera). A detection whose floor point is within ``robot_radius`` of
-the robot (its odometry position, ``CameraFrame.robot_position``) is the robot, masked out as seed 001's are. A detection's point is on the floor (z = 0 in the tracking
-frame), given in the camera's optical frame as every detector gives its own frame's; its covariance is
-``position_variance`` along the floor (seed 001 Table 1: Sigma = diag(0.09, 0.09) m^2).
+the robot (its odometry position, ``CameraFrame.robot_position``) is the robot, masked out as seed 001's are. A
+detection's point is on the floor (z = 0 in the tracking frame), given in the camera's optical frame as every
+detector gives its own frame's; its covariance is ``position_variance`` along the floor (seed 001 Table 1: Sigma =
+diag(0.09, 0.09) m^2).
 """
 
 from __future__ import annotations
