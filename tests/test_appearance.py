@@ -27,6 +27,23 @@ def test_bins_of_colours_and_greys():
     assert bin_image(np.array([[[40, 0, 0]]], np.uint8)).tolist() == [[64 + 1]]
 
 
+def binned_by_hand(image):
+    """The 72 bins from the HSV arithmetic: hue x 8 + saturation where coloured, 64 + value elsewhere."""
+    hue, saturation, value = hsv(image)
+    h, s, v = (np.minimum((x * 8).astype(int), 7) for x in (hue, saturation, value))
+    return np.where((saturation > 0.1) & (value > 0.2), h * 8 + s, 64 + v)
+
+
+def test_looked_up_bins_are_the_arithmetics_for_new_and_seen_colours():
+    rng = np.random.default_rng(1)
+    image = rng.integers(0, 256, (40, 50, 3)).astype(np.uint8)
+    assert (bin_image(image) == binned_by_hand(image)).all()  # colours met for the first time
+    mixed = image.copy()
+    mixed[::2] = rng.integers(0, 256, mixed[::2].shape)  # half the rows new colours, half seen ones
+    assert (bin_image(mixed) == binned_by_hand(mixed)).all()
+    assert (bin_image(image) == binned_by_hand(image)).all()  # all seen
+
+
 def test_histogram_of_a_box_and_the_bhattacharyya_distance():
     bins = np.zeros((4, 6), np.uint8)
     bins[:, 3:] = 47
