@@ -176,3 +176,26 @@ def test_two_crossing_people_followed_without_a_swap(seed):
     assert set(followed[1]).isdisjoint(followed[2])
     assert s["tsr"] >= 0.85  # both tracked from the second frame on, but for a frame or two
     assert s["fp"] <= 0.1 * s["gt"]  # a passing duplicate at most
+
+
+def test_colour_models_follow_close_histograms_and_a_returning_person_gets_their_id():
+    view = camera_view({3: (0, 0, 160, 240), 10: (160, 0, 320, 240)})  # left half colour 3, right half colour 10
+    tr = RjmcmcTracker(weights={"laser/legs": 1.0, "laser/blobs": 1.0, "camera_1/fseg": 1.0}, **CASE)
+    tr.look([view])
+    tr._prepare(detections(0.0, {"laser/legs": [[-0.5, 0]], "laser/blobs": [[-0.5, 0]]}))
+    tr._update_model(1, np.array([-0.5, 0.0]))
+    red = tr._models[1]["camera_1"]
+    assert red[3] == 1.0 and red.sum() == pytest.approx(1.0)
+    # half the box in colour 10: B = sqrt(1 - sqrt(1/2)) = 0.54 > beta_t 0.24, so the model keeps its colour
+    tr._update_model(1, np.array([-0.05, 0.0]))
+    assert tr._models[1]["camera_1"][3] == 1.0
+    # at x = -0.225 the 20-pixel box (141-160) has one column of colour 10: B = sqrt(1 - sqrt(0.95)) = 0.16, below
+    # 0.24, so the model moves a tenth of the way there (Eq. 6, alpha 0.9)
+    assert person_box(view, -0.225, 0.0) == (141, 92, 161, 160)
+    sliver = np.zeros(BINS)
+    sliver[3], sliver[10] = 0.95, 0.05
+    tr._update_model(1, np.array([-0.225, 0.0]))
+    np.testing.assert_allclose(tr._models[1]["camera_1"], 0.9 * red + 0.1 * sliver, atol=1e-12)
+    # person 1 gone (not in the last estimate); a new id where colour 3 shows takes 1's id, one in colour 10 does not
+    assert tr._reidentify({8: np.array([-0.5, 0.0])}) == {8: 1}
+    assert tr._reidentify({8: np.array([0.5, 0.0])}) == {}
