@@ -1,0 +1,57 @@
+"""Seed 003's point-cloud steps by hand: voxel centroids, the ground plane from a noisy synthetic floor, Euclidean
+clusters."""
+
+import numpy as np
+import pytest
+
+from pipeline.detectors.point_cloud import euclidean_clusters, plane_distance, ransac_plane, voxel_grid
+
+
+def test_voxel_grid_gives_each_cubes_centroid():
+    points = np.array([[0.01, 0.01, 0.01], [0.03, 0.05, 0.07],  # one 0.1 m cube
+                       [0.12, 0.0, 0.0],  # the next along x
+                       [-0.05, 0.0, 0.0]])  # the one before
+    np.testing.assert_allclose(voxel_grid(points, 0.1), [[-0.05, 0.0, 0.0], [0.02, 0.03, 0.04], [0.12, 0.0, 0.0]])
+    assert voxel_grid(np.zeros((0, 3)), 0.1).shape == (0, 3)
+
+
+def noisy_room(rng, n_floor=3000, height=1.1, noise=0.01):
+    """A camera's points (optical frame: y down) of a floor ``height`` below it, 1-6 m ahead, with ``noise`` sd,
+    and a person (a 0.25 m radius cylinder 1.7 m tall) standing on it 3 m ahead."""
+    floor = np.column_stack([rng.uniform(-2, 2, n_floor), height + rng.normal(0, noise, n_floor),
+                             rng.uniform(1, 6, n_floor)])
+    angle, up = rng.uniform(0, 2 * np.pi, 1500), rng.uniform(0, 1.7, 1500)
+    person = np.column_stack([0.25 * np.cos(angle), height - up, 3 + 0.25 * np.sin(angle)])
+    return np.concatenate([floor, person])
+
+
+def test_the_ground_plane_of_a_noisy_floor():
+    rng = np.random.default_rng(0)
+    points = noisy_room(rng)
+    plane, inliers = ransac_plane(points, 0.03, rng, up=np.array([0.0, -1.0, 0.0]), max_tilt=np.radians(30))
+    # the floor y = 1.1 with the normal up (-y): 0 x - y + 0 z + 1.1 = 0
+    np.testing.assert_allclose(plane, [0.0, -1.0, 0.0, 1.1], atol=0.005)
+    assert inliers[:3000].mean() > 0.99  # the floor's points, 3 sd of noise
+    assert inliers[3000:].mean() < 0.03  # the person's lowest 3 cm only
+    heights = plane_distance(points[3000:], plane)
+    assert heights.max() == pytest.approx(1.7, abs=0.01)  # heights above the floor
+
+
+def test_a_wall_is_not_taken_for_the_floor():
+    rng = np.random.default_rng(1)
+    floor = noisy_room(rng, n_floor=500)[:500]
+    wall = np.column_stack([rng.uniform(-2, 2, 3000), rng.uniform(-1, 1.1, 3000), np.full(3000, 6.0)])
+    plane, _ = ransac_plane(np.concatenate([floor, wall]), 0.03, rng, iterations=200,
+                            up=np.array([0.0, -1.0, 0.0]), max_tilt=np.radians(30))
+    np.testing.assert_allclose(plane[:3], [0.0, -1.0, 0.0], atol=0.01)  # the larger wall is too steep
+
+
+def test_euclidean_clusters_join_points_nearer_than_the_tolerance():
+    a = np.array([[0.0, 0, 0], [0.05, 0, 0], [0.10, 0, 0], [0.15, 0, 0]])  # a chain 5 cm apart
+    b = np.array([[1.0, 0, 0], [1.0, 0.06, 0]])
+    lone = np.array([[3.0, 0, 0]])
+    points = np.concatenate([b, lone, a])
+    clusters = euclidean_clusters(points, 0.06)
+    assert [sorted(c.tolist()) for c in clusters] == [[3, 4, 5, 6], [0, 1], [2]]  # largest first
+    assert [len(c) for c in euclidean_clusters(points, 0.06, min_size=2, max_size=3)] == [2]
+    assert len(euclidean_clusters(points, 0.04)) == 7  # nothing within 4 cm
