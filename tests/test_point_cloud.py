@@ -55,3 +55,46 @@ def test_euclidean_clusters_join_points_nearer_than_the_tolerance():
     assert [sorted(c.tolist()) for c in clusters] == [[3, 4, 5, 6], [0, 1], [2]]  # largest first
     assert [len(c) for c in euclidean_clusters(points, 0.06, min_size=2, max_size=3)] == [2]
     assert len(euclidean_clusters(points, 0.04)) == 7  # nothing within 4 cm
+
+
+# --- people candidates (pipeline/detectors/head_clusters.py) --------------------------------------------------------
+
+from pipeline.detectors.head_clusters import ClusterLimits, candidates, heads  # noqa: E402
+
+FLOOR = np.array([0.0, -1.0, 0.0, 1.0])  # the camera 1 m up, optical y down: the floor is y = 1, its normal -y
+
+
+def person(rng, x, z, n=4000):
+    """The camera-facing half of a person standing at (x, z): a torso 0.18 m in radius up to 1.5 m and a head 0.11 m
+    in radius at 1.6 m, as the camera's points (y down from the camera, 1 m up), in 6 cm voxels."""
+    angle = rng.uniform(np.pi, 2 * np.pi, n)  # the half towards the camera (z smaller)
+    up = rng.uniform(0, 1.5, n)
+    torso = np.column_stack([x + 0.18 * np.cos(angle), 1.0 - up, z + 0.18 * np.sin(angle)])
+    direction = rng.normal(size=(n // 4, 3))
+    direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+    direction[:, 2] = -np.abs(direction[:, 2])
+    head = np.array([x, 1.0 - 1.6, z]) + 0.11 * direction
+    return voxel_grid(np.concatenate([torso, head]), 0.06)
+
+
+def test_two_people_side_by_side_are_split_at_their_heads_and_one_person_is_not():
+    rng = np.random.default_rng(0)
+    pair = np.concatenate([person(rng, -0.2, 3.0), person(rng, 0.2, 3.0)])  # 0.4 m apart: touching
+    split = candidates(pair, FLOOR)
+    assert len(split) == 2
+    centres = sorted(pair[c, 0].mean() for c in split)
+    np.testing.assert_allclose(centres, [-0.2, 0.2], atol=0.05)
+    assert len(candidates(pair, FLOOR, split=False)) == 1  # without sub-clustering: one candidate
+    alone = person(rng, 0.0, 3.0)
+    assert len(candidates(alone, FLOOR)) == 1  # the shoulders are no heads: within 0.3 m of the head
+
+
+def test_the_heads_of_a_height_map_keep_apart():
+    # three columns of points, 0.2 m apart, 1.8, 1.7 and 1.75 m tall: the middle one is no maximum, and the third is
+    # within 0.3 m of the first only if the distance is 0.4 m or less
+    columns = [(-0.2, 1.8), (0.0, 1.7), (0.2, 1.75)]
+    points = np.array([[x, 1.0 - h, 3.0] for x, h in columns])
+    heights = points @ FLOOR[:3] + FLOOR[3]
+    top = heads(points, heights, FLOOR, ClusterLimits(bin_size=0.1))
+    assert top.tolist() == [0, 2]  # 0.4 m apart
+    assert heads(points, heights, FLOOR, ClusterLimits(bin_size=0.1, head_distance=0.5)).tolist() == [0]
