@@ -98,3 +98,38 @@ def test_the_heads_of_a_height_map_keep_apart():
     top = heads(points, heights, FLOOR, ClusterLimits(bin_size=0.1))
     assert top.tolist() == [0, 2]  # 0.4 m apart
     assert heads(points, heights, FLOOR, ClusterLimits(bin_size=0.1, head_distance=0.5)).tolist() == [0]
+
+
+# --- the ground followed, a person's position (pipeline/detectors/ground.py) ---------------------------------------
+
+from pipeline.detectors.ground import GroundTracker, head_position  # noqa: E402
+
+
+def test_the_ground_is_found_then_followed_as_the_camera_tilts():
+    rng = np.random.default_rng(2)
+    tracker = GroundTracker(voxel=0.06)
+    room = noisy_room(rng)
+    floor = tracker.update(room)
+    # within 1 cm: the floor band, two voxels (12 cm) deep, holds the person's feet too
+    np.testing.assert_allclose(tracker.plane, [0.0, -1.0, 0.0, 1.1], atol=0.01)
+    assert floor[:3000].mean() > 0.99 and floor[3000:].mean() < 0.1
+    # the camera pitches down by 2 degrees (a robot's jolt): the floor's points turn about the camera's x axis
+    a = np.radians(2.0)
+    turn = np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
+    tracker.update(room @ turn.T)
+    expected = np.append(turn @ [0.0, -1.0, 0.0], 1.1)
+    np.testing.assert_allclose(tracker.plane, expected, atol=0.01)
+    kept = tracker.plane.copy()
+    tracker.update(np.zeros((10, 3)) + [0, -5, 3])  # too few floor points near the plane: it is kept
+    np.testing.assert_array_equal(tracker.plane, kept)
+
+
+def test_a_persons_position_is_the_head_centroid_pushed_along_the_ray_onto_the_floor():
+    rng = np.random.default_rng(3)
+    standing = person(rng, 0.5, 3.0)  # head centre (0.5, -0.6, 3.0), the camera-facing half of it seen
+    where, height = head_position(standing, FLOOR)
+    assert height == pytest.approx(1.71, abs=0.03)  # the top of the head: 1.6 + 0.11
+    # the visible half's centroid lies in front of the head's centre; 0.1 m further along the ray brings it near
+    # the centre (x 0.5, z 3.0), and on the floor y = 1
+    assert where[1] == pytest.approx(1.0)
+    np.testing.assert_allclose(where[[0, 2]], [0.5, 3.0], atol=0.06)
