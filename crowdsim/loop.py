@@ -389,6 +389,7 @@ class Simulation:
             camera = self.depth_cameras[k]
             self._next_depth[k] += camera.period
             image = camera.capture(stamp)
+            image.pose = self._camera_in_odom(image.frame)
             self._detect(image)
             self._pending_depth.append(image)
             camera.visibility(image)

@@ -57,7 +57,8 @@ class DepthFrame:
     each pixel shows (-1 for none; simulation-only). ``rgb`` [h, w, 3] uint8 when the camera has colour. The
     simulation fills in, as a wall camera's frame has them, per person the image shows (rows of ``ids``): the box
     around the visible pixels, the box around the person as it would show unoccluded, and the visible fraction
-    (simulation-only; None until filled).
+    (simulation-only; None until filled). The calibration, as a wall camera's frame has it: ``camera_matrix`` (3x3
+    K) and ``pose``, the optical frame in the tracking frame through the robot's odometry (the loop fills it in).
     """
 
     stamp: float
@@ -70,6 +71,8 @@ class DepthFrame:
     boxes: np.ndarray | None = None
     full_boxes: np.ndarray | None = None
     visible_fraction: np.ndarray | None = None
+    camera_matrix: np.ndarray | None = None
+    pose: np.ndarray | None = None
 
 
 @dataclass

@@ -50,6 +50,12 @@ class Intrinsics:
         """[h, w, 3] optical-frame directions through every pixel's centre, z = 1."""
         return self.rays(*np.meshgrid(np.arange(self.width), np.arange(self.height)))
 
+    @property
+    def camera_matrix(self) -> np.ndarray:
+        """K, for pixel u covering [u, u + 1) (the convention of ``rays`` and ``project``)."""
+        cx, cy = self.centre
+        return np.array([[self.f, 0.0, cx], [0.0, self.f, cy], [0.0, 0.0, 1.0]])
+
     def project(self, points: np.ndarray) -> np.ndarray:
         """Pixel coordinates [n, 2] (u, v) of optical-frame points [n, 3] in front of the camera."""
         cx, cy = self.centre
@@ -310,7 +316,8 @@ class DepthCamera:
         # person ids where the camera measured something: beyond its range it sees no one (and the GL renderer
         # does not even draw people there)
         person = np.where(valid, self.scene.person_of_geom(out["geom"]), -1)
-        return DepthFrame(stamp, self.name, z, points, person, out.get("rgb"))
+        return DepthFrame(stamp, self.name, z, points, person, out.get("rgb"),
+                          camera_matrix=self.intrinsics.camera_matrix)
 
     def visibility(self, frame: DepthFrame) -> DepthFrame:
         """``frame`` with its ground truth filled in: the persons the image shows, their visible and unoccluded boxes
@@ -342,8 +349,7 @@ class WallCamera:
 
     @property
     def camera_matrix(self) -> np.ndarray:
-        k = self.intrinsics
-        return np.array([[k.f, 0.0, k.centre[0]], [0.0, k.f, k.centre[1]], [0.0, 0.0, 1.0]])
+        return self.intrinsics.camera_matrix
 
     def world_pose(self) -> np.ndarray:
         """The optical frame in the world, a 4x4 transform."""

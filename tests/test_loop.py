@@ -141,6 +141,16 @@ def test_cameras_run_at_their_rates_and_report_who_they_saw():
     assert len(depth) == 31 and len(wall) == 21
     assert all(0 <= d.stamp - (3.0 + k / 15) < 0.04 + 1e-9 for k, d in enumerate(depth))
     assert depth[0].depth.shape == (120, 160) and wall[0].rgb.shape == (240, 320, 3)
+    # the depth frames carry their calibration: through their pose, the points on the floor lie at z = 0 in odom
+    # (the robot stands on it), the rest up to the 2.5 m walls (Kinect noise: a few cm at 5 m)
+    d = depth[-1]
+    odom = d.points @ d.pose[:3, :3].T + d.pose[:3, 3]
+    floor = odom[:, 2] < 0.2
+    assert floor.mean() > 0.2 and abs(np.median(odom[floor, 2])) < 0.01
+    assert (odom[:, 2] > -0.2).all() and (odom[:, 2] < 2.7).all()
+    uv = d.points @ d.camera_matrix.T
+    pixels = np.floor(uv[:, :2] / uv[:, 2:]).astype(int)
+    assert np.array_equal(pixels[:, ::-1], np.argwhere(np.isfinite(d.depth)))  # each point in its own pixel
     last = frames[-1].visibility
     assert last.sensors == ["front_laser", "rear_laser", "front_depth", "corner_cam"]
     assert np.array_equal(last.ids, frames[-1].agents.id)
