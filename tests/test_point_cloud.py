@@ -133,3 +133,30 @@ def test_a_persons_position_is_the_head_centroid_pushed_along_the_ray_onto_the_f
     # the centre (x 0.5, z 3.0), and on the floor y = 1
     assert where[1] == pytest.approx(1.0)
     np.testing.assert_allclose(where[[0, 2]], [0.5, 3.0], atol=0.06)
+
+
+# --- the detector's geometry (pipeline/detectors/rgbd.py) -----------------------------------------------------------
+
+from pipeline.detectors.rgbd import RgbdPeopleDetector, person_box  # noqa: E402
+
+
+def test_the_box_that_holds_a_person_from_head_to_ground_by_hand():
+    k = np.array([[100.0, 0, 80], [0, 100.0, 60], [0, 0, 1]])
+    # 4 m ahead on the floor 1 m below the camera, 1.7 m tall: feet at v = 60 + 100 / 4 = 85, head at 60 - 17.5 =
+    # 42.5; the window is 42.5 / 0.75 = 56.7 px high around v = 63.75, half as wide, around u = 80
+    box = person_box(k, np.array([0.0, 1.0, 4.0]), np.array([0.0, -1.0, 0.0]), 1.7)
+    np.testing.assert_allclose(box, [80 - 56.667 / 4, 63.75 - 56.667 / 2, 80 + 56.667 / 4, 63.75 + 56.667 / 2],
+                               atol=1e-3)
+
+
+def test_the_detector_finds_people_standing_side_by_side_and_alone():
+    rng = np.random.default_rng(4)
+    floor = noisy_room(rng, height=1.0, noise=0.005)[:3000]
+    cloud = np.concatenate([floor, person(rng, -0.2, 3.0), person(rng, 0.2, 3.0), person(rng, 1.2, 4.5)])
+    detector = RgbdPeopleDetector()
+    where, heights = detector.people(cloud)
+    order = np.argsort(where[:, 0])
+    np.testing.assert_allclose(where[order][:, [0, 2]], [[-0.2, 3.0], [0.2, 3.0], [1.2, 4.5]], atol=0.08)
+    np.testing.assert_allclose(where[:, 1], 1.0, atol=0.02)  # on the floor
+    np.testing.assert_allclose(heights, 1.71, atol=0.05)
+    assert len(RgbdPeopleDetector(sub_clustering=False).people(cloud)[0]) == 2  # the pair stays one
