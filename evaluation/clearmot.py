@@ -161,18 +161,34 @@ class ClearMot:
                gt_ignore: np.ndarray | None = None) -> FrameResult:
         """Score one frame: gt ids [n], positions [n, 2], optional ``gt_ignore`` [n] (occluded or out of range);
         hypothesis ids [m], positions [m, 2] (metres)."""
-        gt_ids = _ids(gt_ids, "gt_ids")
-        hyp_ids = _ids(hyp_ids, "hyp_ids")
+        gt_ids, hyp_ids, ignore = self._checked(gt_ids, hyp_ids, gt_ignore)
         n, m = gt_ids.size, hyp_ids.size
+        gt_pos, hyp_pos = _pos(gt_pos, n, "gt_pos"), _pos(hyp_pos, m, "hyp_pos")
+        return self._update(gt_ids, ignore, hyp_ids, cdist(gt_pos, hyp_pos) if n and m else np.zeros((n, m)))
+
+    def update_dissimilarity(self, gt_ids: np.ndarray, hyp_ids: np.ndarray, dissimilarity: np.ndarray,
+                             gt_ignore: np.ndarray | None = None) -> FrameResult:
+        """Score one frame from a dissimilarity [n, m] of each person and hypothesis in place of their distance on
+        the ground: 1 - IoU of image boxes, say, with the threshold 0.5 for seed 003's 2D matching at IoU 0.5 (MOTP
+        is then the mean of 1 - IoU over the matches)."""
+        gt_ids, hyp_ids, ignore = self._checked(gt_ids, hyp_ids, gt_ignore)
+        d = np.asarray(dissimilarity, float)
+        if d.shape != (gt_ids.size, hyp_ids.size):
+            raise ValueError(f"dissimilarity must be [{gt_ids.size}, {hyp_ids.size}], got {list(d.shape)}")
+        return self._update(gt_ids, ignore, hyp_ids, d)
+
+    @staticmethod
+    def _checked(gt_ids, hyp_ids, gt_ignore):
+        gt_ids, hyp_ids = _ids(gt_ids, "gt_ids"), _ids(hyp_ids, "hyp_ids")
+        n = gt_ids.size
         ignore = np.zeros(n, bool) if gt_ignore is None else np.asarray(gt_ignore, bool).reshape(-1)
         if ignore.size != n:
             raise ValueError(f"gt_ignore must have {n} entries, got {ignore.size}")
-        return self._update(gt_ids, _pos(gt_pos, n, "gt_pos"), ignore, hyp_ids, _pos(hyp_pos, m, "hyp_pos"))
+        return gt_ids, hyp_ids, ignore
 
-    def _update(self, gt_ids, gt_pos, ignore, hyp_ids, hyp_pos) -> FrameResult:
+    def _update(self, gt_ids, ignore, hyp_ids, dist) -> FrameResult:
         n, m = gt_ids.size, hyp_ids.size
         thr = self.threshold
-        dist = cdist(gt_pos, hyp_pos) if n and m else np.zeros((n, m))
 
         # Step 1: keep last frame's correspondences that are still present and within the threshold.
         gt_free = np.ones(n, bool)
@@ -352,4 +368,6 @@ def score_frames(gt: Sequence, tracks: Sequence, cm: ClearMot):
             cm._prev_gt = cm._prev_hyp = _EMPTY_I  # a frame without rows between: nothing was matched in it
         cm._last_frame = frame
         g, t = slice(gb[k], gb[k + 1]), slice(tb[k], tb[k + 1])
-        yield frame, cm._update(gt.id[g], gt.position[g], gt.ignore[g], tracks.id[t], tracks.position[t])
+        n, m = gb[k + 1] - gb[k], tb[k + 1] - tb[k]
+        dist = cdist(gt.position[g], tracks.position[t]) if n and m else np.zeros((n, m))
+        yield frame, cm._update(gt.id[g], gt.ignore[g], tracks.id[t], dist)

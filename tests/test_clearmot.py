@@ -343,3 +343,19 @@ def test_evaluate_on_sequences_equals_stepping_frame_by_frame_and_breaks_corresp
     assert (s["id_switches"], s["fp"]) == (1, 1)
     s = evaluate(seq([(0, 1, 0, 0), (1, 1, 0, 0)]), seq([(0, 10, 0.5, 0), (1, 10, 0.5, 0), (1, 11, 0.1, 0)]))
     assert (s["id_switches"], s["fp"]) == (0, 1)  # consecutive frames: kept although 11 is nearer
+
+
+def test_image_boxes_match_at_iou_half_and_motp_is_the_mean_of_one_minus_iou():
+    from pipeline.detectors.hog import box_iou
+
+    # seed 003's 2D rule: a track's box matches a person's at IoU 0.5 or more
+    people = np.array([[0.0, 0.0, 10.0, 20.0], [50.0, 0.0, 60.0, 20.0]])
+    tracks = np.array([[0.0, 5.0, 10.0, 25.0],  # IoU 150 / 250 = 0.6 with the first
+                       [50.0, 10.0, 60.0, 30.0]])  # IoU 100 / 300 = 1/3 with the second: no match
+    cm = ClearMot(0.5)
+    result = cm.update_dissimilarity(np.array([1, 2]), np.array([7, 8]), 1 - box_iou(people, tracks))
+    assert (result.matches, result.fn, result.fp) == (1, 1, 1)
+    s = cm.summary()
+    assert s["motp_m"] == pytest.approx(0.4) and s["mota"] == pytest.approx(0.0)  # mean IoU of the matches: 0.6
+    with pytest.raises(ValueError, match=r"dissimilarity must be \[2, 2\], got \[2, 1\]"):
+        cm.update_dissimilarity(np.array([1, 2]), np.array([7, 8]), np.zeros((2, 1)))
