@@ -118,7 +118,7 @@ class Simulation:
         robot = scenario["robot"]
         self.driver = robot["driver"]
         self.goals = np.asarray(robot["goals"] or np.zeros((0, 2)), float).reshape(-1, 2)
-        self.planner = build_planner(robot["planner"], robot) if self.driver != "route" else None
+        self.planner = build_planner(robot["planner"], robot) if self.driver in ("goals", "follow") else None
         self.follower = (PersonFollower(self.planner, tuple(robot["follow"]["band"])) if self.driver == "follow"
                          else None)
         self.reset()
@@ -231,6 +231,8 @@ class Simulation:
             v, omega = _command(command)
         elif self.driver == "route":
             v, omega = self.robot.drive_command(self._front_clearance())
+        elif self.driver == "script":
+            v, omega = self.robot.script_command()
         else:
             v, omega = self._nav_command
         if self.driver == "follow" and not self._target_placed:

@@ -18,6 +18,7 @@ class Robot:
         self.velocity = np.zeros(2)  # (v, omega) executed last step
         self.route = np.asarray(params["route"], float) if params["route"] else np.zeros((0, 2))
         self.target = 0
+        self.clock = 0.0  # s the robot has been driven (the warm-up not counted)
 
     @property
     def world_T_odom(self) -> np.ndarray:
@@ -32,6 +33,16 @@ class Robot:
         distance, turn = self.measured_motion(v * dt, omega * dt)
         self.odom_pose = compose(self.odom_pose, arc(distance / dt, turn / dt, dt))
         self.velocity = np.array([v, omega])
+        self.clock += dt
+
+    def script_command(self) -> tuple[float, float]:
+        """The script driver's (v, omega) now: the row of ``script`` ([duration, v, omega], held in turn) that
+        ``clock`` falls in, from the first again with ``loop``; after the last, standing."""
+        rows = np.asarray(self.p["script"], float)
+        ends = np.cumsum(rows[:, 0])
+        t = self.clock % ends[-1] if self.p["loop"] else self.clock
+        k = int(np.searchsorted(ends, t, side="right"))
+        return (0.0, 0.0) if k >= len(rows) else (float(rows[k, 1]), float(rows[k, 2]))
 
     def measured_motion(self, distance: float, turn: float) -> tuple[float, float]:
         """What the wheel encoders report for a true step of ``distance`` (m) and ``turn`` (rad).

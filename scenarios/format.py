@@ -232,9 +232,14 @@ ROBOT = Schema({
     "max_angular_acceleration": F("float", 1.5, min=0.0, exclusive_min=True, doc="rad/s^2 (an assumption)"),
     "safety_distance": F("float", 0.6, min=0.0, doc="m, stop when a laser return is this close in front"),
     "odometry": F(ODOMETRY, doc="wheel odometry's systematic and random errors (all 0: perfect odometry)"),
-    "driver": F("str", "route", choices=("route", "goals", "follow"),
+    "driver": F("str", "route", choices=("route", "goals", "follow", "script"),
                 doc="what drives the robot: route (its route, stopping for what is in front), goals (the planner to "
-                    "each of `goals` in turn; the run ends at the last), follow (the planner after `follow.target`)"),
+                    "each of `goals` in turn; the run ends at the last), follow (the planner after `follow.target`), "
+                    "script (the commands of `script` in turn, again from the first with `loop`)"),
+    "script": F(ListOf(F(ListOf(F("float"), min_items=3)), min_items=1), None,
+                doc="s, m/s, rad/s: [duration, v, omega] rows the script driver holds in turn (seed 003's KTP: the "
+                    "robot still, translating, rotating or driving an arc), within the speed and acceleration "
+                    "limits; after the last, 0 unless `loop`"),
     "goals": F(ListOf(F("point"), min_items=1), None, doc="m, world: the goals the goals driver visits in order"),
     "goal_radius": F("float", 0.3, min=0.0, exclusive_min=True,
                      doc="m, a goal is reached with the robot's centre this near (CrowdNav: the robot radius, 0.3 m)"),

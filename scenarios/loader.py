@@ -140,6 +140,11 @@ def check_driver(scenario: dict, source: str) -> None:
     if driver == "goals" and not robot["goals"]:
         raise ScenarioError(source, "robot.goals", "missing; expected at least one goal [x, y] (m, world) when "
                                                    "robot.driver is goals")
+    if driver == "script":
+        rows = robot["script"] or []
+        if not rows or any(len(row) != 3 or row[0] <= 0 for row in rows):
+            raise ScenarioError(source, "robot.script", f"{rows}; expected [duration, v, omega] rows (s > 0, m/s, "
+                                                        "rad/s) when robot.driver is script")
     near, far = robot["follow"]["band"] if robot["follow"] else (1.0, 2.0)
     if not 0 < near < far:
         raise ScenarioError(source, "robot.follow.band", f"[{near:g}, {far:g}]; expected [near, far] with "

@@ -76,7 +76,9 @@ def _drop(data, *path):
     (lambda: room(driver="goals"), "robot.goals", ("missing", "robot.driver is goals")),
     (lambda: room(driver="goals", goals=[[10.5, 4.0], [11.9, 4.0]]), "robot.goals[1]",
      ("inside a wall", "robot.radius")),
-    (lambda: room(driver="drive"), "robot.driver", ("route, goals, follow",)),
+    (lambda: room(driver="drive"), "robot.driver", ("route, goals, follow, script",)),
+    (lambda: room(driver="script"), "robot.script", ("[duration, v, omega]", "robot.driver is script")),
+    (lambda: room(driver="script", script=[[0.0, 0.1, 0.0]]), "robot.script", ("s > 0",)),
     (lambda: goals_room(goal_radius=0.0), "robot.goal_radius", ("greater than 0",)),
     (lambda: goals_room(planner={"type": "zigzag"}), "robot.planner.type", ("zone, nd, straight, social_force",)),
     (lambda: goals_room(planner={"type": "nd", "zone_reach": 2.0}), "robot.planner.zone_reach", ("unknown key",)),
@@ -280,3 +282,13 @@ def test_same_seed_same_navigation_metrics(tmp_path):
     c = episode_metrics(Simulation(load(tmp_path, data, "again.yaml")), 3, 8.0)
     _same(a, b)
     _same(a, c)
+
+
+def test_the_script_driver_turns_the_robot_in_place_in_the_loop(tmp_path):
+    # seed 003's KTP rotation: 0.11 rad/s in place; 2 s at the default angular acceleration (1.5 rad/s^2: full speed
+    # after 0.073 s, 0.004 rad short of 0.22), then the script ends and the robot stops (0.004 rad more)
+    sim = Simulation(load(tmp_path, room(driver="script", script=[[2.0, 0.0, 0.11]], loop=False)))
+    list(sim.frames(3.0))
+    np.testing.assert_allclose(sim.robot.pose[:2], [1.5, 4.0], atol=1e-12)
+    assert sim.robot.pose[2] == pytest.approx(0.22, abs=0.01)
+    assert sim.robot.velocity.tolist() == [0.0, 0.0]
