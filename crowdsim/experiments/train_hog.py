@@ -29,7 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.detectors.hog import (MODEL_FILE, MODEL_FORMAT, MODELS_DIR, PERSON_SHARE, WINDOW_CELLS, HogModel,
-                                    box_iou, integral, non_maximum_suppression, orientation_votes, window_features)
+                                    box_iou, integral, non_maximum_suppression, orientation_votes, person_in_window,
+                                    window_features)
 from pipeline.detectors.wall_camera import HOG_SCALES
 from scenarios import scenario_from_dict
 from scenarios.loader import read_raw, resolve
@@ -180,9 +181,8 @@ def opencv_people(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
     windows, scores = hog.detectMultiScale(np.ascontiguousarray(rgb[..., ::-1]), hitThreshold=-1.0,
                                            winStride=(8, 8), scale=1.2, groupThreshold=0)
-    windows, scores = np.asarray(windows, float).reshape(-1, 4), np.asarray(scores, float).reshape(-1)
-    u, v, w, h = windows.T
-    boxes = np.column_stack([u + w / 4, v + h * (1 - PERSON_SHARE) / 2, u + 3 * w / 4, v + h * (1 + PERSON_SHARE) / 2])
+    u, v, w, h = np.asarray(windows, float).reshape(-1, 4).T  # OpenCV's (x, y, width, height)
+    boxes, scores = person_in_window(u, v, w, h), np.asarray(scores, float).reshape(-1)
     keep = non_maximum_suppression(boxes, scores, 0.5)
     return boxes[keep], scores[keep]
 

@@ -53,7 +53,6 @@ class SigmaDelta:
         return (difference > v).any(axis=-1)
 
 
-
 def person_blobs(mask: np.ndarray, min_area: int = 150, min_aspect: float = 1.2, max_aspect: float = 5.0,
                  opening: int = 3, closing: int = 7) -> np.ndarray:
     """Boxes [k, 4] (u0, v0, u1, v1; u1, v1 exclusive) of the foreground blobs of a person's shape: after an opening

@@ -159,14 +159,18 @@ class HogModel:
             score = self.score_map(table, size)
             r, c = np.nonzero(score > self.threshold)
             u0, v0 = c * size, r * size
-            margin_v = WINDOW_CELLS[0] * size * (1 - PERSON_SHARE) / 2
-            margin_u = WINDOW_CELLS[1] * size / 4
-            found.append(np.column_stack([u0 + margin_u, v0 + margin_v, u0 + WINDOW_CELLS[1] * size - margin_u,
-                                          v0 + WINDOW_CELLS[0] * size - margin_v]))
+            found.append(person_in_window(u0, v0, WINDOW_CELLS[1] * size, WINDOW_CELLS[0] * size))
             scores.append(score[r, c])
         boxes, scores = np.concatenate(found).reshape(-1, 4), np.concatenate(scores)
         keep = non_maximum_suppression(boxes, scores, overlap)
         return boxes[keep], scores[keep]
+
+
+def person_in_window(u0, v0, width, height) -> np.ndarray:
+    """The person boxes [n, 4] (u0, v0, u1, v1) in detection windows from (u0, v0), ``width`` by ``height``: the
+    middle ``PERSON_SHARE`` of the window's height and the middle half of its width (Dalal & Triggs's margins)."""
+    margin_u, margin_v = width / 4, height * (1 - PERSON_SHARE) / 2
+    return np.column_stack([u0 + margin_u, v0 + margin_v, u0 + width - margin_u, v0 + height - margin_v])
 
 
 def load_model(path: str | Path | None = None) -> HogModel:

@@ -60,32 +60,36 @@ class LegDetector:
 
     def legs(self, scan: LaserScan) -> np.ndarray:
         """The centres [k, 2] (sensor frame) of the blobs that pass the leg filters."""
-        seg = jump_segments(scan, self.jump_distance)
-        if not len(seg.start):
-            return np.zeros((0, 2))
-        first, last = seg.points[seg.start], seg.points[seg.start + seg.count - 1]
-        width = np.linalg.norm(last - first, axis=1)
-        mean, sd, least = inscribed_angles(seg)
-        keep = ((seg.count >= self.min_points) & (width >= self.width[0]) & (width <= self.width[1])
-                & (mean >= self.angle[0]) & (mean <= self.angle[1]) & (sd <= self.max_angle_sd)
-                & (least >= self.sharp_angle))
-        return arc_centres(seg.centroid[keep], width[keep])
-
-    def detect(self, scan: LaserScan) -> DetectedPersons | dict[str, DetectedPersons]:
-        """The persons; with ``blobs``, the named batches {"legs": the persons, "blobs": the raw blobs}."""
-        people = self._persons(scan, pair_legs(self.legs(scan), self.pair_distance, self.single_legs), "laser2d")
-        return {"legs": people, "blobs": self.blobs(scan)} if self.with_blobs else people
+        return self._legs(jump_segments(scan, self.jump_distance))
 
     def blobs(self, scan: LaserScan) -> DetectedPersons:
         """Seed 001's raw-blob observations: the centroids of the blobs of any shape with ``min_points`` returns or
         more whose half-width is within the radius band (no person is formed: a person may give one blob or two).
         Fewer returns are mostly pieces of a wall seen at a grazing angle, whose returns are farther apart than
         ``jump_distance``."""
+        return self._blobs(scan, jump_segments(scan, self.jump_distance))
+
+    def detect(self, scan: LaserScan) -> DetectedPersons | dict[str, DetectedPersons]:
+        """The persons; with ``blobs``, the named batches {"legs": the persons, "blobs": the raw blobs}, from one
+        segmentation."""
         seg = jump_segments(scan, self.jump_distance)
+        people = self._persons(scan, pair_legs(self._legs(seg), self.pair_distance, self.single_legs), "laser2d")
+        return {"legs": people, "blobs": self._blobs(scan, seg)} if self.with_blobs else people
+
+    def _legs(self, seg: Segments) -> np.ndarray:
+        if not len(seg.start):
+            return np.zeros((0, 2))
+        width = _widths(seg)
+        mean, sd, least = inscribed_angles(seg)
+        keep = ((seg.count >= self.min_points) & (width >= self.width[0]) & (width <= self.width[1])
+                & (mean >= self.angle[0]) & (mean <= self.angle[1]) & (sd <= self.max_angle_sd)
+                & (least >= self.sharp_angle))
+        return arc_centres(seg.centroid[keep], width[keep])
+
+    def _blobs(self, scan: LaserScan, seg: Segments) -> DetectedPersons:
         if not len(seg.start):
             return self._persons(scan, np.zeros((0, 2)), "laser_blobs")
-        first, last = seg.points[seg.start], seg.points[seg.start + seg.count - 1]
-        radius = np.linalg.norm(last - first, axis=1) / 2
+        radius = _widths(seg) / 2
         keep = (seg.count >= self.min_points) & (radius >= self.blob_radius[0]) & (radius <= self.blob_radius[1])
         return self._persons(scan, seg.centroid[keep], "laser_blobs")
 
@@ -93,6 +97,11 @@ class LegDetector:
         out = DetectedPersons.on_floor(scan.stamp, scan.frame, modality, self._next_id, xy, self.position_variance)
         self._next_id += len(xy)
         return out
+
+
+def _widths(seg: Segments) -> np.ndarray:
+    """Per blob the distance from its first return to its last."""
+    return np.linalg.norm(seg.points[seg.start + seg.count - 1] - seg.points[seg.start], axis=1)
 
 
 def inscribed_angles(seg: Segments) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

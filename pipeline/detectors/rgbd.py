@@ -13,9 +13,8 @@ from pipeline.types import DepthFrame, DetectedPersons
 
 from .ground import GroundTracker, head_position
 from .head_clusters import ClusterLimits, candidates
+from .hog import PERSON_SHARE
 from .point_cloud import voxel_grid
-
-PERSON_SHARE = 0.75  # of a HOG window's height, the person (Dalal & Triggs's 96 of 128 pixels; PCL's evaluate())
 
 
 def person_box(camera_matrix: np.ndarray, ground: np.ndarray, normal: np.ndarray, height: float) -> np.ndarray:

@@ -143,7 +143,9 @@ def person_box(view: View, x: float, y: float) -> tuple[int, int, int, int] | No
 
 
 class RjmcmcTracker:
-    """The ``rjmcmc`` tracker: seed 001's filter (module docstring); the defaults are its Table 1."""
+    """The ``rjmcmc`` tracker: seed 001's filter (module docstring). The defaults are its Table 1 where it has them;
+    the pooled likelihood's own (p_detect, clutter, looks, newcomer, survival) were measured or chosen on training
+    sequences of its room (``crowdsim experiment seed001 --tune``)."""
 
     def __init__(self, weights: dict | None = None, proposal_sources=TABLE1_PROPOSALS,
                  likelihood_sources=TABLE1_LIKELIHOOD, move_probabilities=(0.15, 0.8, 0.02, 0.03),
@@ -253,8 +255,6 @@ class RjmcmcTracker:
         self._like_w_n = np.concatenate([np.full(len(r), self.weights[s] / max(len(r), 1)) for r, s in like])
         self._like_k = np.array([self.weights[s] * self.looks for _, s in like])
         self._like_gain = np.concatenate([np.full(len(r), self.gain[s]) for r, s in like])
-
-        self._like_onehot = np.repeat(np.eye(len(like)), [len(r) for r, _ in like], axis=0)  # [L, sources]
         self._like_camera = [s.split("/")[0] if s.split("/")[0] in self._views else None for _, s in like]
         self._histograms: dict[tuple[str, int, int], np.ndarray | None] = {}
         self._boxes: dict[tuple[str, int, int], tuple | None] = {}
@@ -480,8 +480,7 @@ class RjmcmcTracker:
         predictive is highest there, if within two sd (a target removed and added back keeps its id); else that of
         the nearest earlier birth of this cycle within two sd not in the state (so the particles agree on one
         newcomer's id, whichever detection bore it); else a new one."""
-        near = math.log(g_at(2 * self.step_sd, self.inv_2var))
-        best, best_log = None, near
+        best, best_log = None, -(2 * self.step_sd) ** 2 * self.inv_2var  # the log kernel two sd away
         for i in self._by_id:
             if i not in ids and (value := self._log_predictive(i, x, y)) >= best_log:
                 best, best_log = i, value
@@ -524,8 +523,7 @@ class RjmcmcTracker:
         position = np.array([estimate[i] for i in order]).reshape(n, 2)
         velocity = np.array([(estimate[i] - self._estimate[i]) / dt if i in self._estimate and dt > 0
                              else np.zeros(2) for i in order]).reshape(n, 2)
-        for i in order:
-            self._born.setdefault(i, stamp)
+        self._born = {i: self._born.get(i, stamp) for i in order}  # only the tracked: memory stays flat
         near = np.zeros(n, bool)
         detection_id = np.full(n, -1, np.int64)
         if n and len(self._prop_xy):
@@ -571,11 +569,6 @@ class RjmcmcTracker:
                 models[name] = h
             elif float(bhattacharyya(h, models[name])) < self.update_threshold:
                 models[name] = blend(models[name], h, self.alpha)
-
-
-def g_at(distance: float, inv_2var: float) -> float:
-    """The peak-1 kernel at ``distance``."""
-    return math.exp(-distance * distance * inv_2var)
 
 
 def _removal_probability(removal: list, p: int) -> float:
