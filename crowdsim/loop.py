@@ -206,7 +206,8 @@ class Simulation:
 
     def _tags(self, agents: AgentStates, near: np.ndarray, scans: list[LaserScan],
               visibility: Visibility) -> GroundTruthTags:
-        """Range, laser beams and occlusion of the ground-truth persons (``near`` of ``agents``)."""
+        """Range, laser beams and occlusion of the ground-truth persons (``near`` of ``agents``). With a depth camera
+        starting the cycles, the visible are those it shows at least half of (KTP's labelling rule, seed 003 Sec. 2)."""
         xy = agents.position[near]
         distance = np.linalg.norm(xy - self.robot.pose[:2], axis=1)
         lasers = [k for k, name in enumerate(visibility.sensors) if name in {scan.frame for scan in scans}]
@@ -216,7 +217,9 @@ class Simulation:
             pose = self._lasers_by_name[scan.frame].pose_in(self.robot.pose)
             points = scan.points()
             seed000 |= seed000_visible(xy, pose[:2], transform_points(pose, points[np.isfinite(points[:, 0])]))
-        return GroundTruthTags(distance, distance <= self.max_range, beams, beams > 0, seed000)
+        cycle = self.scenario["pipeline"]["cycle"]
+        visible = beams > 0 if cycle == "lasers" else visibility.of(cycle)[near] >= 0.5
+        return GroundTruthTags(distance, distance <= self.max_range, beams, visible, seed000)
 
     def step(self, command: tuple[float, float] | None = None) -> Frame | None:
         """Advance one tick; return a Frame when a tracking cycle ran in it.
@@ -256,11 +259,7 @@ class Simulation:
         if depth_due or wall_due:
             self.camera_scene.sync(self.robot.pose, *person)
         self._capture_images(stamp, depth_due, wall_due, agents)
-        if not due:
-            self.timing.sensors_s += time.perf_counter() - t1
-            self.timing.wall_s += time.perf_counter() - t0
-            return None
-        scans = self.laser_array.scan(stamp, self.robot.pose, due)
+        scans = self.laser_array.scan(stamp, self.robot.pose, due) if due else []
         for k, scan in zip(due, scans):
             self._next_scan[k] += self.lasers[k].period
             self._detect(scan)
@@ -269,13 +268,18 @@ class Simulation:
             hit = np.searchsorted(agents.id, scan.person_id[scan.person_id >= 0])
             beams = np.bincount(hit, minlength=len(agents.id)).astype(float)
             self._latest_seen[scan.frame] = (stamp, agents.id, beams, self._laser_view(self.lasers[k], agents))
+        cycle = self.scenario["pipeline"]["cycle"]
+        if not (due if cycle == "lasers" else [k for k in depth_due if self.depth_cameras[k].name == cycle]):
+            self.timing.sensors_s += time.perf_counter() - t1
+            self.timing.wall_s += time.perf_counter() - t0
+            return None
         t2 = time.perf_counter()
         self.timing.sensors_s += t2 - t1
         outputs, self._pending = self._pending, {}
         detections = self.pipeline.fusion.fuse(outputs)
         t3 = time.perf_counter()
-        if self._pending_camera and hasattr(self.pipeline.tracker, "see"):  # a tracker that weighs colour
-            self.pipeline.tracker.see(self._pending_camera)
+        if (self._pending_camera or self._pending_depth) and hasattr(self.pipeline.tracker, "see"):
+            self.pipeline.tracker.see(self._pending_camera + self._pending_depth)  # a tracker that weighs colour
         tracks = self.pipeline.tracker.update(stamp, detections)
         self.timing.tracker_s += time.perf_counter() - t3
         self.timing.tracker_cycles += 1

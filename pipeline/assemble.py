@@ -103,16 +103,17 @@ def build_part(spec: dict, registry: dict[str, type], source: str = "<pipeline>"
 def build_pipeline(spec: dict, lasers: Sequence[str], floor_plan: dict | None = None,
                    source: str = "<pipeline>") -> Pipeline:
     """The parts of a validated ``pipeline`` section of the scenario ``source``: ``detector`` on each of ``lasers``
-    (sensor names), and each sensor that ``detectors`` names gets its own detector in its place; the map filter, when
-    the section has one, on ``floor_plan`` (the scenario's ``map``: the map the robot localises in; None: no
-    filter)."""
+    (sensor names), and each sensor that ``detectors`` names gets its own detector in its place (None: none); the
+    map filter, when the section has one, on ``floor_plan`` (the scenario's ``map``: the map the robot localises in;
+    None: no filter)."""
     own = spec["detectors"]
 
     def detector(name):
         key = f"pipeline.detectors.{name}" if name in own else "pipeline.detector"
         return build_part(own.get(name, spec["detector"]), DETECTORS, source, key)
 
-    detectors = {name: detector(name) for name in [*lasers, *(n for n in own if n not in lasers)]}
+    detectors = {name: detector(name) for name in [*lasers, *(n for n in own if n not in lasers)]
+                 if own.get(name, spec["detector"]) is not None}
     map_filter = None
     if spec["map_filter"] is not None and floor_plan is not None:
         params = dict(spec["map_filter"])

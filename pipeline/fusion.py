@@ -23,7 +23,8 @@ def to_frame(dets: DetectedPersons, pose: np.ndarray, frame: str) -> DetectedPer
         c, s = np.cos(pose[2]), np.sin(pose[2])
         rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])  # a yaw: x-z and y-z terms turn too
     cov = rot @ dets.covariance @ rot.T
-    return DetectedPersons(dets.stamp, frame, dets.modality, dets.detection_id, pos, cov, dets.confidence)
+    return DetectedPersons(dets.stamp, frame, dets.modality, dets.detection_id, pos, cov, dets.confidence,
+                           height=dets.height, appearance=dets.appearance)
 
 
 def fuse(batches: dict[str, DetectedPersons], distance: float, first_id: int = 0) -> DetectedPersons:
@@ -68,7 +69,20 @@ def fuse(batches: dict[str, DetectedPersons], distance: float, first_id: int = 0
         originals[name] = np.full(m, -1, np.int64)
         originals[name][inv[origin == k]] = batch.detection_id
     stamp = max(b.stamp for b in batches)
-    return DetectedPersons(stamp, batches[0].frame, modality, ids, fused_pos, fused_cov, fused_conf, originals)
+    return DetectedPersons(stamp, batches[0].frame, modality, ids, fused_pos, fused_cov, fused_conf, originals,
+                           _mean_rows(batches, "height", inv, count), _mean_rows(batches, "appearance", inv, count))
+
+
+def _mean_rows(batches: list[DetectedPersons], name: str, inv: np.ndarray, count: np.ndarray) -> np.ndarray | None:
+    """A per-detection field (height, appearance) averaged over each fused row's members; None unless every batch
+    has it, of one width."""
+    values = [getattr(b, name) for b in batches]
+    if any(v is None for v in values) or len({np.shape(v)[1:] for v in values}) != 1:
+        return None
+    rows = np.concatenate(values)
+    out = np.zeros((len(count), *rows.shape[1:]))
+    np.add.at(out, inv, rows)
+    return out / np.maximum(count, 1).reshape(-1, *[1] * (rows.ndim - 1))
 
 
 class NearestFusion:

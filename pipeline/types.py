@@ -152,7 +152,8 @@ class DetectedPersons:
 
     A fused batch keeps which detections each of its rows came from (seed 000 Sec. 3.1's composite detections):
     ``originals`` maps each sensor whose detections were fused to [n] ids of its detection in each row, -1 where it
-    gave none; a detector's own batch has None.
+    gave none; a detector's own batch has None. A detector that sees more may add each person's ``height`` (m, top of
+    the head above the floor) and ``appearance`` (a normalised colour histogram per row, seed 003's Eq. 1).
     """
 
     stamp: float
@@ -163,6 +164,8 @@ class DetectedPersons:
     covariance: np.ndarray  # [n, 3, 3]
     confidence: np.ndarray  # [n]
     originals: dict[str, np.ndarray] | None = None
+    height: np.ndarray | None = None  # [n] m
+    appearance: np.ndarray | None = None  # [n, bins]
 
     def __len__(self) -> int:
         return int(self.detection_id.size)
@@ -191,7 +194,8 @@ class TrackedPersons:
 
     Positions and velocities are 2D (x, y) because tracking happens on the ground plane (seed 000 Sec. II-B).
     ``detection_id`` is the detection that updated the track this cycle (-1 when none). Ground truth fills
-    ``group_id`` (-1 for a person walking alone); trackers leave it None.
+    ``group_id`` (-1 for a person walking alone); trackers leave it None. A tracker whose detections have heights
+    gives each track's ``height`` (m, for its image box).
     """
 
     stamp: float
@@ -206,6 +210,7 @@ class TrackedPersons:
     velocity_covariance: np.ndarray  # [n, 2, 2]
     age: np.ndarray  # [n] seconds since the track was started
     group_id: np.ndarray | None = None  # [n] int64, ground truth only
+    height: np.ndarray | None = None  # [n] m
 
     def __len__(self) -> int:
         return int(self.track_id.size)
@@ -221,7 +226,8 @@ class TrackedPersons:
         return TrackedPersons(
             self.stamp, self.frame, self.track_id[mask], self.is_matched[mask], self.is_occluded[mask],
             self.detection_id[mask], self.position[mask], self.velocity[mask], self.position_covariance[mask],
-            self.velocity_covariance[mask], self.age[mask], None if self.group_id is None else self.group_id[mask])
+            self.velocity_covariance[mask], self.age[mask], None if self.group_id is None else self.group_id[mask],
+            None if self.height is None else self.height[mask])
 
 
 @dataclass

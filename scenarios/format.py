@@ -68,6 +68,8 @@ CROWD = Schema({
 WAYPOINT = Schema({
     "position": F("point", required=True, doc="m, world frame"),
     "radius": F("float", 1.0, min=0.0, exclusive_min=True, doc="m, reached when nearer than this"),
+    "wait": F("float", 0.0, min=0.0, doc="s a walker stands at the waypoint once it has reached it, before going on "
+                                        "to the next stage (a group gathering)"),
 })
 
 QUEUE = Schema({
@@ -581,8 +583,11 @@ GROUP_STAGE = Typed(GROUP_STAGE_TYPES, "coherent_motion", "groups", ("update", "
 
 PIPELINE = Schema({
     "detector": F(DETECTOR, doc="the detector on every laser (laser_segments: seed 000's segments and geometry)"),
-    "detectors": F(MapOf(F(DETECTOR)), {},
-                   doc="sensor name -> its own detector, in place of `detector` for that sensor"),
+    "detectors": F(MapOf(F(DETECTOR, optional=True)), {},
+                   doc="sensor name -> its own detector, in place of `detector` for that sensor (null: none)"),
+    "cycle": F("str", "lasers",
+               doc="what starts a tracking cycle: `lasers` (any laser's scan) or a depth camera's name (each of its "
+                   "frames; seed 003's tracker runs at the camera's rate)"),
     "fusion": F(FUSION, doc="merges the detections of one cycle (nearest: seed 000's detection-to-detection fusion)"),
     "fusion_distance": F("float", None, min=0.0,
                          doc="the old spelling of fusion.distance, moved there when the file is loaded"),

@@ -124,7 +124,12 @@ def check_detectors(scenario: dict, source: str) -> None:
         if name not in kinds:
             raise ScenarioError(source, f"pipeline.detectors.{name}",
                                 f"no sensor of this scenario is called so; expected one of: {', '.join(kinds)}")
-        attached.append((f"pipeline.detectors.{name}", spec, kinds[name], name))
+        if spec is not None:
+            attached.append((f"pipeline.detectors.{name}", spec, kinds[name], name))
+    cameras = [s["name"] for s in scenario["sensors"]["depth_cameras"]]
+    if pipeline["cycle"] != "lasers" and pipeline["cycle"] not in cameras:
+        raise ScenarioError(source, "pipeline.cycle", f"{pipeline['cycle']!r}; expected lasers or a depth camera's "
+                                                      f"name: {', '.join(['lasers', *cameras])}")
     for key, spec, kind, what in attached:
         reads = DETECTOR_READS.get(spec["type"], kind)  # a class of one's own reads what it is given
         if reads != kind:

@@ -127,6 +127,7 @@ def test_old_keys_give_todays_parts_and_the_resolved_section_reloads_equal(tmp_p
         "detector": {"type": "laser_segments", "jump_distance": 0.5, "min_points": 3, "min_width": 0.1,
                      "max_width": 0.9, "min_bulge": 0.03, "position_variance": 0.1},
         "detectors": {},
+        "cycle": "lasers",
         "fusion": {"type": "nearest", "distance": 0.3},
         "map_filter": None,
         "groups": {"type": "coherent_motion", **{k: f.default for k, f in COHERENT_MOTION.fields.items()}},
@@ -229,6 +230,44 @@ def test_a_detector_on_a_camera_reads_its_images_and_its_detections_reach_odom()
         np.testing.assert_allclose(image.camera_matrix, [[24 / np.tan(np.radians(22.5)), 0, 32],
                                                          [0, 24 / np.tan(np.radians(22.5)), 24], [0, 0, 1]])
         np.testing.assert_allclose((image.pose @ [0, 0, 5, 1])[:3], expected["corner_cam"], atol=1e-7)
+
+
+class Seeing:
+    """A tracker that keeps the images it is shown and gives no tracks."""
+
+    def __init__(self):
+        self.reset()
+
+    def reset(self):
+        self.images = []
+
+    def see(self, frames):
+        self.images += [(type(f).__name__, f.frame, f.stamp) for f in frames]
+
+    def update(self, stamp, detections):
+        return TrackedPersons.empty(stamp, detections.frame)
+
+
+def test_a_depth_camera_can_start_the_cycles_and_a_sensor_can_go_without_a_detector():
+    # the camera at 12.5 Hz (every other 0.04 s tick) starts every cycle; the lasers still scan but have no
+    # detector, so each cycle's detections are the camera's one, and the tracker sees each image once, at its cycle
+    sensors = {"lasers": LASERS, "depth_cameras": [{"name": "side", "preset": "kinect_160", "rate": 12.5}]}
+    pipeline = {"detectors": {"front_laser": None, "rear_laser": None,
+                              "side": {"type": "test_assemble:OneAhead", "distance": 3.0}},
+                "cycle": "side", "tracker": {"type": "test_assemble:Seeing"}}
+    sim = Simulation(scenario_from_dict(walkers(pipeline, sensors=sensors)))
+    assert set(sim.pipeline.detectors) == {"side"}
+    sim.warm_up()
+    frames = list(sim.frames(1.0))
+    assert len(frames) == 13 and len(sim.pipeline.detectors["side"].frames) == 13  # 2.04 s to 3.0 s
+    np.testing.assert_allclose([f.stamp for f in frames], [2.04, *np.arange(2.08, 3.0, 0.08)], atol=1e-9)
+    for f in frames:
+        assert list(f.detections.originals) == ["side"] and len(f.detections) == 1
+        assert [d.stamp for d in f.depth_frames] == [f.stamp]
+    assert sim.pipeline.tracker.images == [("DepthFrame", "side", f.stamp) for f in frames]
+    with pytest.raises(ScenarioError, match=r"pipeline\.cycle.*'rear'; expected lasers or a depth camera's name: "
+                                            r"lasers, side"):
+        scenario_from_dict(walkers({**pipeline, "cycle": "rear"}, sensors=sensors))
 
 
 def test_a_detectors_named_batches_reach_the_fusion_as_sensor_slash_name():
