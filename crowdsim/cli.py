@@ -240,7 +240,8 @@ def _cmd_bench(args) -> int:
 
 
 # --seeds left out: how many each experiment takes
-DEFAULT_SEEDS = {"train-detector": 20, "table2": 20, "train-relations": 20, "groups": 5, "train-hog": 10}
+DEFAULT_SEEDS = {"train-detector": 20, "table2": 20, "train-relations": 20, "groups": 5, "train-hog": 10,
+                 "seed003": 1}
 
 
 def _cmd_experiment(args) -> int:
@@ -297,6 +298,17 @@ def _cmd_experiment(args) -> int:
         results = experiment(args.runs, workers=args.workers)
         print(write_directory(out, lambda tmp: write(tmp, results)))
         print(f"\n{out / 'seed001.md'}, seed001.json, seed001.png")
+        return 0
+    if args.what == "seed003":
+        from .experiments.seed003 import experiment, write
+
+        if args.seeds < 1 or args.workers < 1:
+            raise UsageError(f"--seeds and --workers: expected at least 1, got {args.seeds} and {args.workers}")
+        out = Path(args.out) if args.out else Path("runs") / f"seed003-{time.strftime('%Y%m%d-%H%M%S')}"
+        check_out_dir(out)
+        results = experiment(args.seeds, workers=args.workers, preset=args.preset)
+        print(write_directory(out, lambda tmp: write(tmp, results)))
+        print(f"\n{out / 'seed003.md'}, seed003.json, seed003.png")
         return 0
     if args.what == "table2":
         from .experiments.table2 import table2, write
@@ -411,17 +423,32 @@ def _cmd_train_relations(args) -> int:
 
 
 def _cmd_train_hog(args) -> int:
-    out = _training_seeds_out(args, 100, 4100)
-    from .experiments.train_hog import DURATION, MODELS_DIR, save, train
+    from .experiments.train_hog import DURATION, MODELS_DIR, save
 
+    if args.camera == "robot":
+        from pipeline.detectors.hog import ROBOT_MODEL_FILE
+
+        from .experiments.train_hog_robot import train
+        out = _training_seeds_out(args, 100, 5100)
+    else:
+        from .experiments.train_hog import train
+        out = _training_seeds_out(args, 100, 4100)
     t0 = time.perf_counter()
     model, info = train(args.seeds, args.workers, args.duration or DURATION)
-    paths = _saved((model, info), lambda m, where: [save(*m, where)], out, MODELS_DIR)
+    name = ROBOT_MODEL_FILE if args.camera == "robot" else None
+    paths = _saved((model, info), lambda m, where: [save(*m, where, *([name] if name else []))], out, MODELS_DIR)
     v = info["validation"]
     print(f"{info['positives']} person windows, {info['negatives']} random and {info['hard_negatives']} hard "
-          f"negatives from seeds {info['train_seeds'][0]}-{info['train_seeds'][1]}; validation (IoU 0.5): F1 "
-          f"{v['f1']:.3f}, precision {v['precision']:.3f}, recall {v['recall']:.3f} at score {model.threshold:.3f}; "
-          f"{time.perf_counter() - t0:.0f} s; model: " + _sizes(paths))
+          f"negatives from seeds {info['train_seeds'][0]}-{info['train_seeds'][1]}; ", end="")
+    if args.camera == "robot":
+        print(f"threshold {model.threshold:.3f} ({info['threshold_recall']:.0%} of the {v['candidates_on_persons']} "
+              f"validation candidates on persons pass, {v['false_above_threshold']:.1%} of the "
+              f"{v['candidates_on_no_one']} on no one), track start {info['start_confidence']:.3f} "
+              f"({info['start_recall']:.0%} pass, {v['false_above_start']:.1%}); ", end="")
+    else:
+        print(f"validation (IoU 0.5): F1 {v['f1']:.3f}, precision {v['precision']:.3f}, recall {v['recall']:.3f} at "
+              f"score {model.threshold:.3f}; ", end="")
+    print(f"{time.perf_counter() - t0:.0f} s; model: " + _sizes(paths))
     return 0
 
 
@@ -570,7 +597,7 @@ def build_parser() -> argparse.ArgumentParser:
                                           "`experiment train-detector` the laser_learned segment classifiers, "
                                           "`experiment train-relations` the group stage's relation classifiers")
     p.add_argument("what", choices=("ppo", "train-detector", "table2", "tune", "train-relations", "groups",
-                                     "train-hog", "seed001", "hog-vs-opencv"),
+                                     "train-hog", "seed001", "hog-vs-opencv", "seed003"),
                    help="ppo: stable-baselines3 PPO on crowdsim/Navigate-v0 with the tracks observation, against "
                         "the random policy (needs [rl]); train-detector: AdaBoost and random-forest segment "
                         "classifiers on labelled airport scans, scored against laser_segments on held-out seeds "
@@ -582,7 +609,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "train-hog: the wall cameras' HOG person detector on rendered images of seed 001's room "
                         "(needs [train]); seed001: seed 001's Tables 2-6, its RJMCMC filter over the laser and the "
                         "wall cameras in four modes on sequences I-III, its claims checked; hog-vs-opencv: our HOG "
-                        "model against OpenCV's INRIA-trained one on held-out images (needs [compare])")
+                        "model against OpenCV's INRIA-trained one on held-out images (needs [compare]); seed003: "
+                        "seed 003's Tables 2-5, its RGB-D detector and tracker on the KTP-like room's five "
+                        "situations under four robot motions, in five variants, its claims checked")
     p.add_argument("--minutes", type=float, default=30.0, help="wall-clock training budget (default 30)")
     p.add_argument("--envs", type=int, default=8, help="environments stepped together (default 8)")
     p.add_argument("--people", type=int, default=10, help="people per environment (default 10)")
@@ -591,10 +620,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="output directory (default runs/<what>-<time>; train-detector, train-relations and "
                                  "train-hog: the shipped models, pipeline/detectors/models/ or "
                                  "pipeline/groups/models/, replaced); must be new or empty")
+    p.add_argument("--camera", choices=("wall", "robot"), default="wall",
+                   help="train-hog: the wall cameras' model (seed 001's room) or the robot depth camera's (seed 003's "
+                        "KTP room, training seeds from 5100)")
     p.add_argument("--seeds", type=int, help="train-detector: training seeds, from 1000 (default 20); table2: seeds "
                                              "from 1 (default 20); train-relations: training seeds, from 1100 "
                                              "(default 20); groups: held-out seeds, from 1200 (default 5); "
-                                             "train-hog: training seeds, from 4100 (default 10)")
+                                             "train-hog: training seeds, from 4100 (default 10); seed003: "
+                                             "evaluation seeds from 1, each 20 runs (default 1)")
+    p.add_argument("--preset", choices=("kinect_160", "kinect_640"), default="kinect_160",
+                   help="seed003: the robot camera's resolution (default kinect_160, QQVGA, as seed 003's timing)")
     p.add_argument("--duration", type=float, help="table2, tune, train-relations and groups: s of each airport run "
                                                   "(default: the scenario's; the others: 60)")
     p.add_argument("--runs", type=int, default=8, help="seed001: filter runs per sequence and mode (default 8, as "
@@ -606,8 +641,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--storage", help="tune: an Optuna storage to keep and resume the study, e.g. sqlite:///study.db")
     p.add_argument("--quick", action="store_true", help="train-detector: 4 short training seeds, 1 validation and "
                                                         "1 test seed (a smoke test, not models to ship)")
-    p.add_argument("--workers", type=int, default=2, help="train-detector, table2, train-relations, groups and "
-                                                          "seed001: processes running the simulations (default 2)")
+    p.add_argument("--workers", type=int, default=2, help="train-detector, table2, train-relations, groups, "
+                                                          "seed001 and seed003: processes running the simulations "
+                                                          "(default 2)")
     p.set_defaults(func=_cmd_experiment)
     p = sub.add_parser("dataset", help="labelled datasets: generate, export, evaluate-detector "
                                        "(docs/dataset-format.md)")

@@ -276,7 +276,8 @@ class Simulation:
         t2 = time.perf_counter()
         self.timing.sensors_s += t2 - t1
         outputs, self._pending = self._pending, {}
-        detections = self.pipeline.fusion.fuse(outputs)
+        detections = (self.pipeline.fusion.fuse(outputs) if outputs  # no detector ran since the last cycle: none
+                      else DetectedPersons.empty(stamp, TRACKING_FRAME, "none"))
         t3 = time.perf_counter()
         if (self._pending_camera or self._pending_depth) and hasattr(self.pipeline.tracker, "see"):
             self.pipeline.tracker.see(self._pending_camera + self._pending_depth)  # a tracker that weighs colour

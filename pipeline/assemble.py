@@ -16,12 +16,14 @@ from scenarios.schema import ScenarioError, import_class
 from .detectors.laser_segments import SegmentDetector
 from .detectors.learned_segments import LearnedSegmentDetector
 from .detectors.legs import LegDetector
+from .detectors.rgbd import RgbdPeopleDetector
 from .detectors.wall_camera import WallCameraDetector
 from .fusion import NearestFusion
 from .groups import CoherentMotionGroups
 from .map_filter import MapFilter
 from .tracking.mht import MultiHypothesisTracker
 from .tracking.nnt import NearestNeighbourTracker
+from .tracking.rgbd_tracker import RgbdTracker
 from .tracking.rjmcmc import RjmcmcTracker
 from .types import (CameraFrame, DepthFrame, DetectedPersons, LaserScan, SocialRelations, TrackedGroups,
                     TrackedPersons)
@@ -63,10 +65,11 @@ class GroupStage(Protocol):
 
 
 DETECTORS: dict[str, type] = {"laser_segments": SegmentDetector, "laser_learned": LearnedSegmentDetector,
-                              "laser_legs": LegDetector, "wall_people": WallCameraDetector}
+                              "laser_legs": LegDetector, "wall_people": WallCameraDetector,
+                              "rgbd_people": RgbdPeopleDetector}
 FUSIONS: dict[str, type] = {"nearest": NearestFusion}
 TRACKERS: dict[str, type] = {"nnt": NearestNeighbourTracker, "mht": MultiHypothesisTracker,
-                             "rjmcmc": RjmcmcTracker}
+                             "rjmcmc": RjmcmcTracker, "rgbd": RgbdTracker}
 GROUP_STAGES: dict[str, type] = {"coherent_motion": CoherentMotionGroups}
 
 

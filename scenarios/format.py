@@ -11,6 +11,7 @@ from .laser_presets import LASER_PRESETS
 from .schema import Field, ListOf, MapOf, Schema, Typed
 
 F = Field
+INIT_CONFIDENCE = 0.325  # the shipped robot-camera HOG model's track-start score (train-hog --camera robot prints it)
 
 AGENT_TYPE = Schema({
     "speed_mean": F("float", 1.34, min=0.0, doc="m/s, mean desired speed"),
@@ -396,11 +397,42 @@ WALL_CAMERA_DETECTOR = Schema({
                            doc="m^2 along the floor (seed 001 Table 1: Sigma = diag(0.09, 0.09))"),
 })
 
+# seed 003's RGB-D detector (Munaro & Menegatti Sec. 3); the paper gives the head distance and voxels under 0.1 m
+# (Table 7), the rest are its authors' released code's (PCL's ground-based people detection), see
+# pipeline/detectors/head_clusters.py
+RGBD_DETECTOR = Schema({
+    "voxel": F("float", 0.06, min=0.0, exclusive_min=True, max=0.1,
+               doc="m, the voxel grid's leaf (Table 7: below 0.1; PCL's 0.06)"),
+    "cluster_tolerance": F("float", 0.15, min=0.0, exclusive_min=True,
+                           doc="m, largest gap between neighbours of a Euclidean cluster (PCL: two voxels, 0.12 m; "
+                               "our bodies' torso ends in a flat top 12 cm wider than the neck all round, and from "
+                               "below a camera sees a gap there: at 0.12 m a person 2-3 m away loses their head)"),
+    "head_distance": F("float", 0.3, min=0.0, exclusive_min=True,
+                       doc="m, least distance between two people's heads when a cluster is split (Table 7)"),
+    "up": F("point3", [0.0, -1.0, 0.0], doc="the floor's up direction in the camera's optical frame, roughly (y is "
+                                            "down): the first ground plane is searched near it"),
+    "max_tilt_deg": F("float", 30.0, min=0.0, max=90.0, doc="deg, the first ground plane's largest tilt from `up`"),
+    "sub_clustering": F("bool", True, doc="split clusters at their heads (seed 003 Sec. 3.1.1; false: Table 2's "
+                                          "\"No sub.\" row)"),
+    "hog": F("bool", True, doc="score each candidate's box with the HOG classifier and keep those above threshold"),
+    "model": F("str", None, optional=True,
+               doc="the HOG model: left out, the shipped one (`crowdsim experiment train-hog --camera robot`); or the "
+                   "path of the .npz it wrote with --out"),
+    "threshold": F("float", None, optional=True,
+                   doc="least HOG score of a detection; left out: the model's (the score 97% of its validation "
+                       "people pass, as seed 003 keeps it low: Sec. 4.1.2)"),
+    "colour_space": F("str", "rgb", choices=("rgb", "hsv"),
+                      doc="the detections' colour histograms (Tables 2-5: RGB; Table 7 recommends HSV); the tracker's "
+                          "colour_space must be the same"),
+    "position_variance": F("float", 0.036, min=0.0, exclusive_min=True,
+                           doc="m^2 along the floor (the authors' later tracker: 30 (2 voxel)^2 / 12 at 0.06 m)"),
+})
+
 DETECTOR_TYPES = {"laser_segments": SEGMENT_DETECTOR, "laser_learned": LEARNED_DETECTOR, "laser_legs": LEG_DETECTOR,
-                  "wall_people": WALL_CAMERA_DETECTOR}
+                  "wall_people": WALL_CAMERA_DETECTOR, "rgbd_people": RGBD_DETECTOR}
 # the `sensors` list whose frames each built-in detector reads
 DETECTOR_READS = {"laser_segments": "lasers", "laser_learned": "lasers", "laser_legs": "lasers",
-                  "wall_people": "wall_cameras"}
+                  "wall_people": "wall_cameras", "rgbd_people": "depth_cameras"}
 
 NEAREST_FUSION = Schema({
     "distance": F("float", 0.4, min=0.0, doc="m, detections of two sensors nearer than this are one person"),
@@ -536,7 +568,47 @@ RJMCMC = Schema({
     "seed": F("int", 0, doc="the filter's random stream (one run = one draw; seed 001 reports eight)"),
 })
 
-TRACKER_TYPES = {"nnt": NNT, "mht": MHT, "rjmcmc": RJMCMC}
+# seed 003's tracker (pipeline/tracking/rgbd_tracker.py): Table 7 where it gives a value, else the authors' later
+# OpenPTrack's (tracker.yaml) and their AdaBoost demo's; a test keeps these defaults equal to the class's
+RGBD_TRACKER = Schema({
+    "frame": F("str", "odom", doc="the tracks' frame (the detections')"),
+    "motion_weight": F("float", 0.5, min=0.0, doc="gamma of the Mahalanobis distance in the joint cost (Table 7)"),
+    "appearance_weight": F("float", 30.0, min=0.0,
+                           doc="alpha of the colour classifier's confidence (Table 7: 30-100; 0: no colour term)"),
+    "detector_weight": F("float", 1.0, min=0.0, doc="beta of the HOG score (Table 7)"),
+    "acceleration_variance": F("float", 100.0, min=0.0, exclusive_min=True,
+                               doc="m^2/s^4, white acceleration of the constant-velocity model (OpenPTrack)"),
+    "initial_velocity_variance": F("float", 100.0, min=0.0, exclusive_min=True,
+                                   doc="m^2/s^2, a new track's velocity variance (OpenPTrack)"),
+    "use_velocity": F("bool", True, doc="the Mahalanobis distance over position and velocity (false: position only, "
+                                        "seed 003's RGB-D People test)"),
+    "velocity_lag": F("float", 1.0, min=0.0, exclusive_min=True,
+                      doc="s, a detection's velocity is measured from the track's position 1-2 lags back (OpenPTrack)"),
+    "gate_probability": F("float", 0.999, min=0.0, exclusive_min=True, max=0.999999,
+                          doc="chi-square gate on the Mahalanobis distance (OpenPTrack)"),
+    "init_confidence": F("float", INIT_CONFIDENCE, doc="least HOG score of a detection that starts or validates a "
+                                                       "track: the shipped robot-camera model's, passed by 90% of its "
+                                                       "validation people (Table 7's [-1, -0.5] on the paper's scale)"),
+    "confirm": F("int", 3, min=1, doc="detections at init_confidence that confirm a new track (OpenPTrack)"),
+    "confirm_time": F("float", 2.4, min=0.0, doc="s, an unconfirmed track is dropped after this (OpenPTrack)"),
+    "max_missed_time": F("float", 8.0, min=0.0, doc="s without a detection before a track is deleted (OpenPTrack)"),
+    "report_time": F("float", 0.5, min=0.0,
+                     doc="s since its latest detection that a track is still reported (kept, unreported, to "
+                         "max_missed_time for a person who comes back)"),
+    "learn": F("bool", True, doc="the colour classifiers keep learning (false: frozen after their first cycle, "
+                                 "seed 003's ablation)"),
+    "learn_interval": F("float", 1.0, min=0.0,
+                        doc="s between a track's learning cycles, one track a cycle (0: every track every cycle; an "
+                            "update costs about 0.5 ms here)"),
+    "random_windows": F("int", 10, min=0, doc="random image windows learnt as negatives (the authors' demo)"),
+    "colour_space": F("str", "rgb", choices=("rgb", "hsv"), doc="of the histograms; the detector's must be the same"),
+    "bins": F("int", 16, min=2, doc="histogram bins a channel (seed 003 Sec. 3.2.1)"),
+    "pool": F("int", 250, min=1, doc="weak classifiers (Table 7)"),
+    "selectors": F("int", 50, min=1, doc="selectors of the strong classifier (Table 7)"),
+    "seed": F("int", 0, doc="the classifiers' and windows' random stream"),
+})
+
+TRACKER_TYPES = {"nnt": NNT, "mht": MHT, "rjmcmc": RJMCMC, "rgbd": RGBD_TRACKER}
 
 # seed 000 Sec. V-C's static-map filter (pipeline/map_filter.py; a test keeps these defaults equal to the class's)
 MAP_FILTER = Schema({
@@ -593,7 +665,7 @@ PIPELINE = Schema({
                          doc="the old spelling of fusion.distance, moved there when the file is loaded"),
     "tracker": F(TRACKER, doc="the tracker (nnt: seed 000's nearest-neighbour Kalman tracker; mht: its "
                                   "multi-hypothesis baseline; rjmcmc: seed 001's particle filter over the laser and "
-                                  "the wall cameras)"),
+                                  "the wall cameras; rgbd: seed 003's RGB-D tracker)"),
     "groups": F(GROUP_STAGE, doc="social relations, groups and their tracking (coherent_motion: seed 000's SPENCER "
                                  "group stage)"),
     "map_filter": F(MAP_FILTER, optional=True,

@@ -23,6 +23,9 @@ TORSO_BOTTOM, TORSO_TOP = 0.62, 1.45  # m
 HEAD_RADIUS = 0.10  # m
 HEAD_CENTRE = 1.62  # m (top of the head at 1.72 m)
 HEIGHT = HEAD_CENTRE + HEAD_RADIUS
+# the neck joins the head to the torso (a neck of 38 cm round); without it a depth camera's cloud has a 15 cm gap
+# there, and a person falls apart into torso and head (seed 003's Euclidean clusters join points 2 voxels apart)
+NECK_RADIUS = 0.06  # m
 # the sphere that ends each leg at the hip lies wholly inside the torso, so what sees the body never needs it
 HIP_INSIDE_TORSO = (HIP_HALF_WIDTH + LEG_RADIUS < TORSO_RADIUS
                     and TORSO_BOTTOM < HIP_HEIGHT - LEG_RADIUS and HIP_HEIGHT + LEG_RADIUS < TORSO_TOP)

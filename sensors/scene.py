@@ -71,8 +71,11 @@ def _person_xml(k: int, parts: set[str]) -> str:
         xml += (f'<geom name="person{k}_torso" type="cylinder" size="{body.TORSO_RADIUS} {torso_half:.4f}" '
                 f'pos="0 0 {body.TORSO_BOTTOM + torso_half:.4f}" group="{TORSO_GROUP}" rgba=".8 .5 .3 1"/>')
     if "head" in parts:
+        neck_half = (body.HEAD_CENTRE - body.TORSO_TOP) / 2
         xml += (f'<geom name="person{k}_head" type="sphere" size="{body.HEAD_RADIUS}" pos="0 0 {body.HEAD_CENTRE}" '
-                f'group="{HEAD_GROUP}" rgba=".85 .68 .55 1"/>')
+                f'group="{HEAD_GROUP}" rgba=".85 .68 .55 1"/>'
+                f'<geom name="person{k}_neck" type="cylinder" size="{body.NECK_RADIUS} {neck_half:.4f}" '
+                f'pos="0 0 {body.TORSO_TOP + neck_half:.4f}" group="{HEAD_GROUP}" rgba=".85 .68 .55 1"/>')
     xml += "</body>"
     if "legs" in parts:
         for side in ("left", "right"):
@@ -155,7 +158,9 @@ class Scene:
         self._torso_mocap = mocap("person{}")
         self._leg_mocap = (np.stack([mocap("person{}_left_leg"), mocap("person{}_right_leg")], 1)
                            if "legs" in self.parts else np.zeros((capacity, 0), np.int64))
-        self._geom = {part: geoms(f"person{{}}_{part}") for part in ("torso", "head") if part in self.parts}
+        self._geom = {"torso": geoms("person{}_torso")} if "torso" in self.parts else {}
+        if "head" in self.parts:
+            self._geom["head"] = np.stack([geoms("person{}_head"), geoms("person{}_neck")], 1)
         if "legs" in self.parts:
             self._geom["legs"] = np.stack([geoms("person{}_left_leg"), geoms("person{}_right_leg")], 1)
         self._all_person_geoms = np.concatenate([g.reshape(capacity, -1 if capacity else 1)
@@ -225,7 +230,7 @@ class Scene:
         for part, colour in (("torso", top), ("head", body.SKIN), ("legs", trousers)):
             if part in self._geom:
                 g = self._geom[part][:n]
-                m.geom_rgba[g, :3] = colour[:, None] if g.ndim == 2 else colour
+                m.geom_rgba[g, :3] = colour[:, None] if g.ndim == 2 and colour.ndim == 2 else colour
         m.geom_rgba[self._all_person_geoms[:n].ravel(), 3] = 1.0
         m.geom_rgba[self._all_person_geoms[n:].ravel(), 3] = 0.0
         self.slot_person_id[:n] = person_ids

@@ -288,7 +288,7 @@ def test_a_detectors_named_batches_reach_the_fusion_as_sensor_slash_name():
 
 @pytest.mark.parametrize("pipeline, key, words", [
     ({"tracker": {"type": "nn"}}, "pipeline.tracker.type",
-     ["expected one of nnt, mht, rjmcmc or module.path:ClassName", "'nn'"]),
+     ["expected one of nnt, mht, rjmcmc, rgbd or module.path:ClassName", "'nn'"]),
     ({"tracker": {"gate": 9.0}}, "pipeline.tracker.gate",
      ["unknown key; expected one of: type, process_noise, gate_chi2, n_confirm"]),
     ({"tracker": {"type": "test_assemble:EchoTracker", "gain": 2}}, "pipeline.tracker.gain",

@@ -143,20 +143,22 @@ from pipeline.detectors.rgbd import RgbdPeopleDetector, person_box  # noqa: E402
 def test_the_box_that_holds_a_person_from_head_to_ground_by_hand():
     k = np.array([[100.0, 0, 80], [0, 100.0, 60], [0, 0, 1]])
     # 4 m ahead on the floor 1 m below the camera, 1.7 m tall: feet at v = 60 + 100 / 4 = 85, head at 60 - 17.5 =
-    # 42.5; the window is 42.5 / 0.75 = 56.7 px high around v = 63.75, half as wide, around u = 80
-    box = person_box(k, np.array([0.0, 1.0, 4.0]), np.array([0.0, -1.0, 0.0]), 1.7)
-    np.testing.assert_allclose(box, [80 - 56.667 / 4, 63.75 - 56.667 / 2, 80 + 56.667 / 4, 63.75 + 56.667 / 2],
-                               atol=1e-3)
+    # 42.5; the box is 42.5 px high, half as wide, around u = 80. A second person 0.5 m to the right at 2 m, 1.5 m
+    # tall: u = 80 + 100 0.5 / 2 = 105, feet at 60 + 50 = 110, head at 60 - 25 = 35, 75 px high
+    box = person_box(k, np.array([[0.0, 1.0, 4.0], [0.5, 1.0, 2.0]]), np.array([0.0, -1.0, 0.0]), np.array([1.7, 1.5]))
+    np.testing.assert_allclose(box, [[80 - 42.5 / 4, 42.5, 80 + 42.5 / 4, 85], [105 - 75 / 4, 35, 105 + 75 / 4, 110]],
+                               atol=1e-9)
 
 
 def test_the_detector_finds_people_standing_side_by_side_and_alone():
     rng = np.random.default_rng(4)
     floor = noisy_room(rng, height=1.0, noise=0.005)[:3000]
     cloud = np.concatenate([floor, person(rng, -0.2, 3.0), person(rng, 0.2, 3.0), person(rng, 1.2, 4.5)])
-    detector = RgbdPeopleDetector()
-    where, heights = detector.people(cloud)
+    detector = RgbdPeopleDetector(hog=False)
+    where, heights, members = detector.people(cloud)
+    assert [len(m) > 30 for m in members] == [True] * 3
     order = np.argsort(where[:, 0])
     np.testing.assert_allclose(where[order][:, [0, 2]], [[-0.2, 3.0], [0.2, 3.0], [1.2, 4.5]], atol=0.08)
     np.testing.assert_allclose(where[:, 1], 1.0, atol=0.02)  # on the floor
     np.testing.assert_allclose(heights, 1.71, atol=0.05)
-    assert len(RgbdPeopleDetector(sub_clustering=False).people(cloud)[0]) == 2  # the pair stays one
+    assert len(RgbdPeopleDetector(sub_clustering=False, hog=False).people(cloud)[0]) == 2  # the pair stays one

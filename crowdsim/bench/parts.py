@@ -13,6 +13,7 @@ from scenarios import load_scenario
 
 from .common import HALL, populated_crowd, rate, write_figures
 from .seed001 import bench_seed001
+from .seed003 import bench_seed003
 
 def bench_crowd(n_agents: int, quick: bool) -> float:
     crowd, _ = populated_crowd(n_agents)
@@ -166,5 +167,12 @@ def run_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
     show("seed001_filter_ms", coop["filter_ms"], "ms/cycle", "seed 001: RJMCMC filter, all sensors, 4 passers-by")
     show("seed001_realtime_factor", coop["realtime_factor"], "x real time",
          f"seed 001: laser + {coop['cameras']} cameras + filter at 5 Hz ({coop['frames_per_s']:.1f} frames/s)", 2)
+    rgbd = bench_seed003(quick)
+    for stage, ms in rgbd["stage_ms"].items():
+        show(f"seed003_{stage.replace(' ', '_')}_ms", ms, "ms/frame",
+             f"seed 003: {stage} ({100 * rgbd['stage_share'][stage]:.0f}% of the time)", 2)
+    show("seed003_frames_per_s", rgbd["frames_per_s"], "frames/s",
+         "seed 003: RGB-D detector + tracker, 160 x 120, 5 people (paper: 26 and 19)", 1)
+    figures["seed003"] = rgbd
     write_figures(json_path, figures)
     return figures

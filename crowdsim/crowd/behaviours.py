@@ -85,11 +85,12 @@ def at_slowest_pace(v0: np.ndarray, group: np.ndarray) -> np.ndarray:
 
 
 class Routes:
-    """Routes of stages, each a waypoint (reached within its radius) or a queue (left when served), and each
-    person's place on theirs: ``route`` (-1 for standing people, who hold their spot) and ``stage``. At the end
-    of a route a person leaves the simulation (a sink) or starts over."""
+    """Routes of stages, each a waypoint (reached within its radius, then stood at for its ``wait``) or a queue
+    (left when served), and each person's place on theirs: ``route`` (-1 for standing people, who hold their spot),
+    ``stage``, and ``wait_end``, the time a person standing at their waypoint goes on (NaN while not waiting). At
+    the end of a route a person leaves the simulation (a sink) or starts over."""
 
-    columns = {"route": PerAgent(np.int64), "stage": PerAgent(np.int64, 0)}
+    columns = {"route": PerAgent(np.int64), "stage": PerAgent(np.int64, 0), "wait_end": PerAgent(float, np.nan)}
 
     def __init__(self, scenario: dict):
         self.names = list(scenario["routes"])
@@ -98,6 +99,7 @@ class Routes:
         shape = (max(len(self.names), 1), length)
         self.goal = np.zeros(shape + (2,))
         self.radius = np.ones(shape)
+        self.wait = np.zeros(shape)  # s stood at a waypoint once reached (a group gathering there)
         self.queue = np.full(shape, -1, np.int64)  # the queue a stage is, -1 for a waypoint
         self.length = np.zeros(shape[0], np.int64)
         self.sink = np.zeros(shape[0], bool)
@@ -109,6 +111,7 @@ class Routes:
                 else:
                     self.goal[k, i] = wps[stage]["position"]
                     self.radius[k, i] = wps[stage]["radius"]
+                    self.wait[k, i] = wps[stage].get("wait", 0.0)  # dicts made by hand may leave it out
             self.length[k] = len(route["waypoints"])
             self.sink[k] = route["sink"]
 
@@ -128,14 +131,20 @@ class Routes:
         crowd.goal_radius[who] = self.radius[crowd.route[who], crowd.stage[who]]
 
     def update(self, crowd: Crowd, served: np.ndarray) -> None:
-        """Move on whoever reached their waypoint, or was ``served`` at their queue, to their next stage; remove
-        those at the end of a route that ends in a sink."""
+        """Stop whoever reached a waypoint with a wait; move on whoever reached one without, waited there long
+        enough, or was ``served`` at their queue, to their next stage; remove those at the end of a route that ends
+        in a sink."""
         r = np.maximum(crowd.route, 0)
+        waited = crowd.wait_end <= crowd.t  # NaN, not waiting, compares False
         walking_to_waypoint = ~crowd.holding & (self.stage_queue(crowd) < 0)
         reached = walking_to_waypoint & (np.linalg.norm(crowd.goal - crowd.pos, axis=1) < crowd.goal_radius)
-        reached |= served
+        wait = self.wait[r, crowd.stage]
+        stay = reached & (wait > 0)
+        crowd.wait_end[stay] = crowd.t + wait[stay]
+        reached = (reached & ~stay) | waited | served
         if not reached.any():
             return
+        crowd.wait_end[waited] = np.nan
         crowd.stage[reached] += 1
         done = reached & (crowd.stage >= self.length[r])
         sink = done & self.sink[r]
@@ -220,7 +229,7 @@ class Attractions:
         done = np.flatnonzero((crowd.visiting >= 0) & (crowd.t >= crowd.visit_end))
         crowd.visiting[done] = -1
         crowd.routes.head_for_stage(crowd, done)
-        free = np.flatnonzero((crowd.route >= 0) & (crowd.queued < 0) & (crowd.visiting < 0))
+        free = np.flatnonzero(~crowd.holding)
         p = crowd.pos[free, None, :]
         spot = np.clip(p, self.lo[None], self.hi[None])  # nearest point of each area
         dist = np.linalg.norm(p - spot, axis=2)

@@ -118,19 +118,28 @@ class Crowd:
                         **self.routes.start(self.routes.names.index(route), n))
 
     @property
+    def waiting(self) -> np.ndarray:
+        """Persons standing at a waypoint for its ``wait`` (``behaviours.Routes``)."""
+        return ~np.isnan(self.wait_end)
+
+    @property
     def holding(self) -> np.ndarray:
-        """Persons who hold a spot rather than walk: standing people, people in a queue or at an attraction."""
-        return (self.route < 0) | (self.queued >= 0) | (self.visiting >= 0)
+        """Persons who hold a spot rather than walk: standing people, people in a queue, at an attraction or
+        waiting at a waypoint."""
+        return (self.route < 0) | (self.queued >= 0) | (self.visiting >= 0) | self.waiting
 
     # -- forces -------------------------------------------------------------------------------------------------
 
     def desired_direction(self) -> tuple[np.ndarray, np.ndarray]:
         """Unit vectors towards the current goals (or along the wall for walkers escaping one, see
-        ``behaviours.Escapes``) and the desired speeds (standing people slow to their spot)."""
+        ``behaviours.Escapes``) and the desired speeds (standing people slow to their spot; people waiting at a
+        waypoint want to stand wherever they stopped, so a group gathering there stands round it, not on its
+        centre)."""
         to_goal = self.goal - self.pos
         dist = np.linalg.norm(to_goal, axis=1)
         e = to_goal / np.maximum(dist, 1e-9)[:, None]
         speed = np.where(self.holding, self.v0 * np.clip(dist / ARRIVAL_RADIUS, 0.0, 1.0), self.v0)
+        speed[self.waiting] = 0.0
         self.escapes.steer(self, e)
         return e, speed
 

@@ -220,9 +220,9 @@ def train(n_seeds: int = 10, workers: int = 2, duration: float = DURATION) -> tu
     return HogModel(model.weight, model.bias, threshold), info
 
 
-def save(model: HogModel, info: dict, out: Path = MODELS_DIR) -> Path:
+def save(model: HogModel, info: dict, out: Path = MODELS_DIR, name: str = MODEL_FILE) -> Path:
     """The model as an .npz of plain arrays with a JSON header, replacing the file whole."""
-    path = Path(out) / MODEL_FILE
+    path = Path(out) / name
     tmp = path.with_name(f".{path.stem}.{os.getpid()}.partial.npz")
     np.savez_compressed(tmp, header=np.array(json.dumps({"format": MODEL_FORMAT, "info": info})),
                         weight=model.weight, bias=np.array(model.bias), threshold=np.array(model.threshold))

@@ -24,6 +24,7 @@ class ClusterLimits:
     """The candidate rules' numbers (module docstring), for a voxel grid of ``voxel`` m."""
 
     voxel: float = 0.06
+    cluster_tolerance: float | None = None  # m between neighbours of a cluster; None: two voxels (PCL)
     merge_distance: float = 0.4  # m, between cluster centres on the ground
     min_height: float = 1.3  # m, a person's least height above the ground
     max_height: float = 2.3
@@ -35,7 +36,7 @@ class ClusterLimits:
 
     @property
     def tolerance(self) -> float:
-        return 2 * self.voxel
+        return 2 * self.voxel if self.cluster_tolerance is None else self.cluster_tolerance
 
     @property
     def point_range(self) -> tuple[int, int]:

@@ -27,7 +27,8 @@ BLOCK = 2  # cells
 PERSON_SHARE = 96 / 128  # Dalal & Triggs's windows hold a person 96 pixels high in 128
 L2HYS_CLIP = 0.2
 MODELS_DIR = Path(__file__).parent / "models"
-MODEL_FILE = "hog_person.npz"  # `crowdsim experiment train-hog` makes it
+MODEL_FILE = "hog_person.npz"  # the wall cameras': `crowdsim experiment train-hog` makes it
+ROBOT_MODEL_FILE = "hog_robot_camera.npz"  # the robot's depth camera's: `crowdsim experiment train-hog --camera robot`
 MODEL_FORMAT = "crowdsim-hog/1"
 GRADIENT_MAX = 255  # of a centred difference of 8-bit channels
 
@@ -173,9 +174,10 @@ def person_in_window(u0, v0, width, height) -> np.ndarray:
     return np.column_stack([u0 + margin_u, v0 + margin_v, u0 + width - margin_u, v0 + height - margin_v])
 
 
-def load_model(path: str | Path | None = None) -> HogModel:
-    """The shipped model, or the .npz at ``path`` that `crowdsim experiment train-hog --out` wrote."""
-    path = Path(path) if path is not None else MODELS_DIR / MODEL_FILE
+def load_model(path: str | Path | None = None, shipped: str = MODEL_FILE) -> HogModel:
+    """The shipped model (``shipped``, the wall cameras' unless named), or the .npz at ``path`` that `crowdsim
+    experiment train-hog --out` wrote."""
+    path = Path(path) if path is not None else MODELS_DIR / shipped
     try:
         with np.load(path) as data:
             header = json.loads(str(data["header"]))

@@ -21,8 +21,10 @@ def voxel_grid(points: np.ndarray, leaf: float) -> np.ndarray:
     if not len(points):
         return points
     cells = np.floor(points / leaf).astype(np.int64)
-    _, index, counts = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
-    index = index.reshape(-1)
+    cells -= cells.min(axis=0)
+    span = cells.max(axis=0) + 1
+    keys = (cells[:, 0] * span[1] + cells[:, 1]) * span[2] + cells[:, 2]  # one integer a cube, in the same order
+    _, index, counts = np.unique(keys, return_inverse=True, return_counts=True)
     sums = np.stack([np.bincount(index, points[:, k], minlength=len(counts)) for k in range(3)], axis=1)
     return sums / counts[:, None]
 

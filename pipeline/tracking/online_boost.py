@@ -5,7 +5,8 @@ A sample is the joint colour histogram of a detection's pixels, 16 bins a channe
 of a pool of 250 weak classifiers looks at one feature: the histogram's mass inside a random axis-aligned box of
 colour space (Eq. 2), and says positive when that mass is nearer the running mean of the track's samples than of the
 others' (means followed by a Kalman filter, as Grabner & Bischof's weak learners). 50 selectors each choose, from the
-shared pool, the weak classifier of least importance-weighted error so far; the strong classifier's confidence is the
+shared pool, the weak classifier of least importance-weighted error so far that no earlier selector took (else, after
+a first sample, every selector takes the same one and the vote is all or nothing); the strong classifier's confidence is the
 selectors' votes weighted by log((1 - e) / e) / 2, positive for the track's colours.
 
 Positives are the track's own detections; negatives the other detections of the frame and random image windows
@@ -31,6 +32,20 @@ def colour_histogram(colours: np.ndarray, bins: int = BINS) -> np.ndarray:
     counts = np.bincount((c[:, 0] * bins + c[:, 1]) * bins + c[:, 2], minlength=bins ** 3).astype(float)
     total = counts.sum()
     return counts / total if total else counts
+
+
+def rgb_to_hsv(rgb: np.ndarray) -> np.ndarray:
+    """8-bit RGB [..., 3] to 8-bit HSV with all three channels on 0-255 (hue's 360 degrees over 256 values), so that
+    ``colour_histogram`` bins every channel alike."""
+    c = np.asarray(rgb, np.float64)
+    high, low = c.max(-1), c.min(-1)
+    span = high - low
+    safe = np.where(span > 0, span, 1.0)
+    r, g, b = np.moveaxis(c, -1, 0)
+    sextant = np.where(high == r, ((g - b) / safe) % 6, np.where(high == g, (b - r) / safe + 2, (r - g) / safe + 4))
+    hue = np.where(span > 0, np.minimum(np.floor(sextant * (256 / 6)), 255), 0)
+    saturation = np.where(high > 0, np.rint(255 * span / np.where(high > 0, high, 1.0)), 0)
+    return np.stack([hue, saturation, high], -1).astype(np.uint8)
 
 
 class OnlineColourClassifier:
@@ -77,11 +92,13 @@ class OnlineColourClassifier:
         self.seen[k] = True
         correct = self._votes(f) == (1.0 if positive else -1.0)
         importance = 1.0
+        taken = np.zeros(len(correct), bool)
         for n in range(len(self.chosen)):
             self.right[n] += importance * correct
             self.wrong[n] += importance * ~correct
             error = self.wrong[n] / (self.right[n] + self.wrong[n])
-            best = int(error.argmin())
+            best = int(np.where(taken, np.inf, error).argmin())  # each selector a feature of its own
+            taken[best] = True
             e = float(error[best])
             self.chosen[n] = best
             self.alpha[n] = 0.5 * np.log((1 - e) / e) if e < 0.5 else 0.0
