@@ -31,7 +31,9 @@ cost (motion, colour, detector), and a per-track online-boosted colour classifie
   a detection for ``max_missed_time`` s is deleted (OpenPTrack's ``sec_before_old``, 8 s in tracker.yaml): until
   then its growing covariance lets a returning person take it up again. A track is reported while its latest
   detection is at most ``report_time`` s old: KTP labels only the people an image shows, so a track kept for a person
-  who left or is hidden would be a false positive there (seed 003 reports about 1% of them).
+  who left or is hidden would be a false positive there (seed 003 reports about 1% of them). No track starts within
+  ``clearance`` of a track that took a detection this cycle: two people's heads are never nearer than 0.3 m (Table
+  7's sub-clustering distance), so such a detection is a piece of a person sub-clustering split off.
 """
 
 from __future__ import annotations
@@ -122,7 +124,8 @@ class RgbdTracker:
                  acceleration_variance: float = 100.0, initial_velocity_variance: float = 100.0,
                  use_velocity: bool = True, velocity_lag: float = 1.0, gate_probability: float = 0.999,
                  init_confidence: float = INIT_CONFIDENCE, confirm: int = 3, confirm_time: float = 2.4,
-                 max_missed_time: float = 8.0, report_time: float = 0.5, learn: bool = True, learn_interval: float = 1.0,
+                 max_missed_time: float = 8.0, report_time: float = 0.1, clearance: float = 0.3,
+                 learn: bool = True, learn_interval: float = 1.0,
                  random_windows: int = 10, colour_space: str = "rgb", bins: int = BINS, pool: int = POOL,
                  selectors: int = SELECTORS, seed: int = 0):
         """``colour_space`` is that of the random windows' histograms; the detector must make the detections' in the
@@ -141,7 +144,7 @@ class RgbdTracker:
         self.gate = {dof: float(chi2.ppf(gate_probability, dof)) for dof in (2, 4)}
         self.init_confidence = init_confidence
         self.confirm, self.confirm_time, self.max_missed_time = int(confirm), confirm_time, max_missed_time
-        self.report_time = report_time
+        self.report_time, self.clearance = report_time, clearance
         self.learn, self.learn_interval = learn, learn_interval
         self.random_windows = int(random_windows)
         self.colour_space = colour_space
@@ -263,9 +266,13 @@ class RgbdTracker:
         self._classifiers = [self._classifiers[i] for i in idx]
 
     def _initiate(self, stamp, used, z, R, det_ids, hog, heights) -> None:
-        """A track for every detection no track took with c_HOG >= init_confidence: at it, velocity 0."""
+        """A track for every detection no track took with c_HOG >= init_confidence, unless it lies within
+        ``clearance`` of a track that took one (a person split in two by sub-clustering): at it, velocity 0."""
         free = hog >= self.init_confidence
         free[used] = False
+        taken = self._t["x"][self._t["det"] >= 0, :2]
+        if len(taken) and free.any():
+            free &= np.hypot(*(z[:, None] - taken[None]).transpose(2, 0, 1)).min(axis=1) >= self.clearance
         new = np.flatnonzero(free)
         k = new.size
         if k == 0:
