@@ -172,7 +172,7 @@ def run_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
         show(f"seed003_{stage.replace(' ', '_')}_ms", ms, "ms/frame",
              f"seed 003: {stage} ({100 * rgbd['stage_share'][stage]:.0f}% of the time)", 2)
     show("seed003_frames_per_s", rgbd["frames_per_s"], "frames/s",
-         "seed 003: RGB-D detector + tracker, 160 x 120, 5 people (paper: 26 and 19)", 1)
+         "seed 003: RGB-D detector + tracker, 160 x 120, 5 people (paper: 26)", 1)
     figures["seed003"] = rgbd
     write_figures(json_path, figures)
     return figures

@@ -3,7 +3,8 @@ Munaro, Basso & Menegatti 2012): Euclidean clusters, those too high dropped, tho
 cluster holding several people split at their heads.
 
 The paper names the steps and one number, 0.3 m between heads (Table 7); the rest are the values of the authors' own
-released code (PCL's ground-based people detection): clusters 2 voxels apart, 36 to 5,111 points at 6 cm voxels,
+released code (PCL's ground-based people detection): clusters 2 voxels apart (``cluster_tolerance`` may say more:
+pipeline/detectors/rgbd.py), 36 to 5,111 points at 6 cm voxels,
 cluster centres merged within 0.4 m, people 1.3-2.3 m tall, a height map of 6 cm bins across the image, sub-clusters of
 more than 30 points, a head the top eighth of a person.
 

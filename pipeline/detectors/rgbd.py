@@ -4,8 +4,11 @@ when the HOG classifier scores the image box that would hold them from head to g
 3.1.2), with the colour histogram of their points for the tracker's appearance classifier (Sec. 3.2.1).
 
 The HOG model is this testbed's own, trained on the robot camera's rendered images (`crowdsim experiment train-hog
---camera robot`); its threshold is the score the validation images' people nearly all pass (the paper's "minimum
+--camera robot`); its threshold is the score 97% of the validation candidates on people pass (the paper's "minimum
 confidences under -1.25 work well": low, since the 3D stage has already found the candidates).
+
+Clusters join points up to 0.15 m apart, not PCL's two voxels (0.12 m): our bodies' torso ends in a flat top wider
+than the neck, and a camera below it sees a gap there that at 0.12 m cuts the head off a person 2-3 m away.
 """
 
 from __future__ import annotations
@@ -44,9 +47,9 @@ class RgbdPeopleDetector:
     candidate (confidence 0)."""
 
     def __init__(self, voxel: float = 0.06, cluster_tolerance: float = 0.15, head_distance: float = 0.3,
-                 up: list = OPTICAL_UP,
-                 max_tilt_deg: float = 30.0, sub_clustering: bool = True, hog: bool = True, model: str | None = None,
-                 threshold: float | None = None, colour_space: str = "rgb", position_variance: float = 0.036):
+                 up: list = OPTICAL_UP, max_tilt_deg: float = 30.0, sub_clustering: bool = True, hog: bool = True,
+                 model: str | None = None, threshold: float | None = None, colour_space: str = "rgb",
+                 position_variance: float = 0.036):
         if colour_space not in COLOUR_SPACES:
             raise ValueError(f"colour_space: {colour_space!r}; expected one of {', '.join(COLOUR_SPACES)}")
         self.voxel = voxel
