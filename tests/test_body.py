@@ -108,7 +108,7 @@ def test_a_scene_holds_only_the_parts_its_sensors_see():
     # two 70 cm lasers see torsos only: one geom per person; a 38 cm laser, legs only
     assert parts_at(0.70) == {"torso"} and parts_at(0.38) == {"legs"} and parts_at(1.62) == {"head"}
     full, torsos = Scene(np.array(FAR_WALL), 0.425, 5), Scene(np.array(FAR_WALL), 0.425, 5, parts={"torso"})
-    assert full.model.ngeom - torsos.model.ngeom == 5 * 3
+    assert full.model.ngeom - torsos.model.ngeom == 5 * 4  # head, neck and two legs
     with pytest.raises(ValueError, match="unknown body parts"):
         Scene(np.array(FAR_WALL), 0.425, 5, parts={"arms"})
     # the torso-only scene gives a 70 cm laser the same scan as the full one

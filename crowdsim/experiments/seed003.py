@@ -318,7 +318,7 @@ def plot(results: dict, path) -> None:
         ax.set_xticks(x, labels, rotation=20)
         ax.set_title(f"MOTA % {title}")
         ax.grid(axis="y", alpha=0.3)
-    axes[0].legend()
+    axes[0].legend(loc="lower left")
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)

@@ -210,7 +210,8 @@ class RjmcmcTracker:
 
     # -- cameras ---------------------------------------------------------------------------------------------------
     def see(self, frames) -> None:
-        """The wall cameras' latest frames (with their calibration), for the colour term."""
+        """The cameras' latest frames with their calibration (wall cameras; a robot's colour depth camera too), for the
+        colour term."""
         self.look(views(frames))
 
     def look(self, camera_views: list[View]) -> None:
