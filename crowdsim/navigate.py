@@ -44,11 +44,11 @@ def with_planner(scenario: dict, planner: str | None) -> dict:
     already (or ``planner`` is None), the type's defaults otherwise. A scenario whose robot drives its route has no
     planner to change: ScenarioError naming robot.driver."""
     robot = scenario["robot"]
-    if robot["driver"] == "route":
+    if robot["driver"] not in ("goals", "follow"):
         raise ScenarioError(scenario["source"], "robot.driver",
-                            "route (the robot drives its route, no planner); expected goals or follow: crowdsim "
-                            "navigate compares planners on a scenario whose robot drives to goals or follows a "
-                            "person")
+                            f"{robot['driver']} (the robot drives its {robot['driver']}, no planner); expected goals "
+                            "or follow: crowdsim navigate compares planners on a scenario whose robot drives to "
+                            "goals or follows a person")
     spec = robot["planner"] if planner in (None, robot["planner"]["type"]) else validate(
         {"type": planner}, PLANNER, "--planner", "robot.planner")
     return {**scenario, "robot": {**robot, "planner": spec}}

@@ -278,7 +278,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
            "groups": CsvWriter(tmp / "groups.csv", GROUPS_HEADER),
            "robot": CsvWriter(tmp / "robot.csv", ROBOT_HEADER),
            "visibility": CsvWriter(tmp / "visibility.csv", VISIBILITY_HEADER, VISIBILITY_FORMAT, {3: sensors})}
-    navigating = sim.driver != "route"
+    navigating = sim.driver in ("goals", "follow")
     if navigating:
         csv["persons"] = CsvWriter(tmp / "persons.csv", PERSONS_HEADER)
     if sim.driver == "follow":

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from crowdsim.loop import Simulation
+from crowdsim.run import run
 from pipeline.detectors.hog import MODELS_DIR, ROBOT_MODEL_FILE, load_model
 from pipeline.detectors.rgbd import RgbdPeopleDetector
 from pipeline.tracking.rgbd_tracker import INIT_CONFIDENCE, RgbdTracker
@@ -46,3 +47,12 @@ def test_one_person_walking_away_is_detected_where_they_stand_and_tracked():
     assert tracked[:2] == [0, 0] and set(tracked[2:]) == {1}  # confirmed at its third detection, one track
     assert frame.tracks.height[0] == pytest.approx(1.7, abs=0.15)
     assert sim.clearmot.summary()["mota"] > 0.9
+
+
+def test_a_run_of_the_scripted_robot_writes_no_navigation_task(tmp_path):
+    # the script driver has no goal or person to follow: crowdsim run writes the tracking outputs only
+    scenario = load_scenario("ktp_back_and_forth")
+    scenario["duration"] = 1.0
+    metrics = run(scenario, tmp_path / "run", progress=False)
+    assert (tmp_path / "run" / "tracks.csv").exists() and not (tmp_path / "run" / "navigation.json").exists()
+    assert metrics["frames"] == 30  # a cycle at each of the camera's 30 frames a second

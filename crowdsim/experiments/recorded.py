@@ -41,9 +41,9 @@ def record(scenario: dict, seed: int, duration: float | None = None) -> list[Cyc
     from crowdsim.loop import Simulation
 
     sim = Simulation(scenario)
-    if sim.driver != "route":
-        raise ValueError(f"recording needs a scenario whose robot drives its route, not '{sim.driver}': the robot "
-                         "would move with the pipeline's output")
+    if sim.driver not in ("route", "script"):
+        raise ValueError(f"recording needs a scenario whose robot drives its route or script, not '{sim.driver}': "
+                         "the robot would move with the pipeline's output")
     lasers = {laser.name: laser for laser in sim.lasers}
     sim.reset(seed)
     sim.warm_up()
