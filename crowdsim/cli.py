@@ -22,12 +22,10 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 def _cmd_run(args) -> int:
     from scenarios import load_scenario
 
-    from .outdir import check_out_dir
     from .run import cameras_line, navigation_tables, run, summary_table
 
     scenario = load_scenario(args.scenario, seed=args.seed, duration=args.duration)
-    out = Path(args.out) if args.out else Path("runs") / f"{scenario['name']}-{time.strftime('%Y%m%d-%H%M%S')}"
-    check_out_dir(out)
+    out = _run_dir(args, scenario["name"])
     metrics = run(scenario, out, rrd=args.rrd, progress=not args.quiet)
     print(summary_table(metrics))
     if "navigation" in metrics:
@@ -194,7 +192,7 @@ def _cmd_validate(args) -> int:
     from .crowd.validation import run_validation
     from .outdir import write_directory
 
-    out = Path(args.out) if args.out else Path("runs") / f"validation-{time.strftime('%Y%m%d-%H%M%S')}"
+    out = _run_dir(args, "validation")
     results = write_directory(out, lambda tmp: run_validation(tmp, quick=args.quick, progress=True))
     for check in results["checks"]:
         print(f"{'pass' if check['passed'] else 'FAIL'}  {check['name']}")
@@ -245,7 +243,7 @@ DEFAULT_SEEDS = {"train-detector": 20, "table2": 20, "train-relations": 20, "gro
 
 
 def _cmd_experiment(args) -> int:
-    from .outdir import check_out_dir, write_directory
+    from .outdir import write_directory
 
     if args.seeds is None:
         args.seeds = DEFAULT_SEEDS.get(args.what)
@@ -261,8 +259,7 @@ def _cmd_experiment(args) -> int:
         if args.seeds < 1 or args.workers < 1:
             raise UsageError(f"--seeds and --workers: expected at least 1, got {args.seeds} and {args.workers}")
         seeds = held_out_seeds(args.seeds)
-        out = Path(args.out) if args.out else Path("runs") / f"groups-{time.strftime('%Y%m%d-%H%M%S')}"
-        check_out_dir(out)
+        out = _run_dir(args, "groups")
         results = run(seeds, args.duration or 60.0, workers=args.workers)
         print(write_directory(out, lambda tmp: write(tmp, results, seeds)))
         print(f"\n{out / 'groups.md'}, groups.json, groups.png")
@@ -288,8 +285,7 @@ def _cmd_experiment(args) -> int:
 
         if args.runs < 1 or args.workers < 1:
             raise UsageError(f"--runs and --workers: expected at least 1, got {args.runs} and {args.workers}")
-        out = Path(args.out) if args.out else Path("runs") / f"seed001-{time.strftime('%Y%m%d-%H%M%S')}"
-        check_out_dir(out)
+        out = _run_dir(args, "seed001")
         if args.tune:
             from .experiments.seed001 import tune, write_tuning
 
@@ -304,8 +300,7 @@ def _cmd_experiment(args) -> int:
 
         if args.seeds < 1 or args.workers < 1:
             raise UsageError(f"--seeds and --workers: expected at least 1, got {args.seeds} and {args.workers}")
-        out = Path(args.out) if args.out else Path("runs") / f"seed003-{time.strftime('%Y%m%d-%H%M%S')}"
-        check_out_dir(out)
+        out = _run_dir(args, "seed003")
         results = experiment(args.seeds, workers=args.workers, preset=args.preset)
         print(write_directory(out, lambda tmp: write(tmp, results)))
         print(f"\n{out / 'seed003.md'}, seed003.json, seed003.png")
@@ -316,8 +311,7 @@ def _cmd_experiment(args) -> int:
         if args.seeds < 1:
             raise UsageError(f"--seeds: expected at least 1, got {args.seeds}")
         seeds = list(range(1, args.seeds + 1))
-        out = Path(args.out) if args.out else Path("runs") / f"table2-{time.strftime('%Y%m%d-%H%M%S')}"
-        check_out_dir(out)
+        out = _run_dir(args, "table2")
         figures = table2(seeds, args.duration, workers=args.workers)
         print(write_directory(out, lambda tmp: write(tmp, figures, seeds)))
         print(f"\n{out / 'table2.md'}, table2.json, table2.png")
@@ -327,7 +321,7 @@ def _cmd_experiment(args) -> int:
             from .experiments.tune import tune
         except ImportError as e:
             raise UsageError(f"experiment tune: needs {e.name}: pip install -e \".[tune]\"") from None
-        out = Path(args.out) if args.out else Path("runs") / f"tune-{time.strftime('%Y%m%d-%H%M%S')}"
+        out = _run_dir(args, "tune")
         r = write_directory(out, lambda tmp: tune(tmp, args.trials, args.storage, duration=args.duration or 60.0,
                                                   seed=args.seed))
         print(f"{r['trials']} trials; best MOTA {r['best_train_mota']:.1f}% on the training seeds; held out: "
@@ -336,8 +330,7 @@ def _cmd_experiment(args) -> int:
         return 0
     if args.minutes <= 0:
         raise UsageError(f"--minutes: expected a time above 0, got {args.minutes}")
-    out = Path(args.out) if args.out else Path("runs") / f"ppo-{time.strftime('%Y%m%d-%H%M%S')}"
-    check_out_dir(out)
+    out = _run_dir(args, "ppo")
     from .experiments.ppo import run_ppo
 
     r = write_directory(out, lambda tmp: run_ppo(tmp, args.minutes, envs=args.envs, people=args.people,
@@ -350,6 +343,15 @@ def _cmd_experiment(args) -> int:
               f"{e['collision_rate']:.0%}, timeout {e['timeout_rate']:.0%}, mean return {e['mean_return']:.2f}")
     print(f"learning curve: {out / 'learning_curve.png'}")
     return 0
+
+
+def _run_dir(args, name: str) -> Path:
+    """A command's output folder: ``--out``, or runs/<name>-<time>; checked to be new or empty before any work."""
+    from .outdir import check_out_dir
+
+    out = Path(args.out) if args.out else Path("runs") / f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
+    check_out_dir(out)
+    return out
 
 
 def _training_out(args) -> Path | None:
