@@ -27,9 +27,10 @@ def bundled_scenarios() -> dict[str, str]:
 
 
 def resolve(name_or_path: str) -> Path:
-    """A bundled name (``airport_disembarkation``), a path to a YAML file, or a PedSim XML scenario file."""
+    """A bundled name (``airport_disembarkation``), a path to a YAML file, or a PedSim XML scenario file (a folder
+    of the bundled name, a run's output say, does not hide the bundled scenario)."""
     path = Path(name_or_path)
-    if path.suffix in (".yaml", ".yml", ".xml") or path.exists():
+    if path.suffix in (".yaml", ".yml", ".xml") or path.is_file():
         if not path.is_file():
             raise ScenarioError(str(path), "<file>", "no such scenario file")
         return path

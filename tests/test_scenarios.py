@@ -280,6 +280,15 @@ def test_missing_file(tmp_path):
     expect_error(path, "<file>", "no such scenario file")
 
 
+def test_a_folder_named_as_a_bundled_scenario_does_not_hide_it(tmp_path, monkeypatch):
+    # `crowdsim run ktp_group --out ktp_group` leaves a folder of that name: the name, and a file based on it, still
+    # mean the bundled scenario
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "ktp_room").mkdir()
+    assert load_scenario("ktp_room")["name"] == "ktp_room"
+    assert load_scenario("ktp_group")["robot"]["driver"] == "script"  # ktp_group starts from base: ktp_room
+
+
 def test_not_a_bundled_name(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     with pytest.raises(ScenarioError) as info:
