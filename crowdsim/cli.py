@@ -4,13 +4,18 @@ scenario-keys, bench."""
 from __future__ import annotations
 
 import argparse
+import errno
+import math
+import re
 import sys
 import time
 import warnings
 from pathlib import Path
 
+from .errors import Error
 
-class UsageError(Exception):
+
+class UsageError(Error):
     """A command-line argument that cannot be used: one line naming it and what was expected."""
 
 
@@ -19,12 +24,23 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     print(f"crowdsim: warning: {message}", file=sys.stderr if file is None else file)
 
 
-def _cmd_run(args) -> int:
-    from scenarios import load_scenario
+def _load(args, name: str, **flags):
+    """The scenario ``name`` with the command's flags over its keys (``flags``: key -> its value, None: the file's);
+    a flag's bad value is blamed on the flag, not on the file."""
+    from scenarios import ScenarioError, load_scenario
 
+    try:
+        return load_scenario(name, allow_large=getattr(args, "allow_large", False), **flags)
+    except ScenarioError as e:
+        if flags.get(e.key) is not None:
+            raise UsageError(f"--{e.key} {flags[e.key]}: {e.message}") from None
+        raise
+
+
+def _cmd_run(args) -> int:
     from .run import cameras_line, navigation_tables, run, summary_table
 
-    scenario = load_scenario(args.scenario, seed=args.seed, duration=args.duration)
+    scenario = _load(args, args.scenario, seed=args.seed, duration=args.duration)
     out = _run_dir(args, scenario["name"])
     metrics = run(scenario, out, rrd=args.rrd, progress=not args.quiet)
     print(summary_table(metrics))
@@ -53,14 +69,15 @@ def _cmd_evaluate(args) -> int:
                                   tracking_table)
     from evaluation.stream import CsvPair
 
-    from .outdir import check_out_dir
+    from .outdir import check_out_dir, write_directory, write_file
 
-    if args.json and Path(args.json).exists():
-        raise EvaluationInputError(f"--json {args.json}: already exists; expected a new file (nothing was written)")
+    _check_json(args)
     if args.motchallenge:
-        check_out_dir(Path(args.motchallenge))
-    if args.threshold <= 0:
-        raise EvaluationInputError(f"--threshold: expected a distance above 0 m, got {args.threshold}")
+        check_out_dir(Path(args.motchallenge), "--motchallenge")
+    if not (math.isfinite(args.threshold) and args.threshold > 0):
+        raise UsageError(f"--threshold {args.threshold}: expected a distance above 0 m")
+    if args.max_range is not None and not (args.max_range > 0):  # inf: no limit
+        raise UsageError(f"--max-range {args.max_range}: expected a distance above 0 m")
     if bool(args.runs) == bool(args.gt or args.tracks) or (not args.runs and not (args.gt and args.tracks)):
         raise EvaluationInputError("expected either --gt GT.csv and --tracks TRACKS.csv, or --runs DIR [DIR ...]")
     if bool(args.relations) != bool(args.groups) or (args.runs and args.relations):
@@ -95,7 +112,7 @@ def _cmd_evaluate(args) -> int:
                 print(f"{d}:\n{groups_table(g)}")
             report["groups"] = {str(d): g for d, g in zip(with_groups, groups)}
         if args.json:
-            Path(args.json).write_text(json.dumps(report, indent=2) + "\n")
+            write_file(Path(args.json), json.dumps(report, indent=2) + "\n")
         return 0
     pair = files(args.gt, args.tracks)
     tracking = score_tracking(pair, args.threshold)
@@ -108,29 +125,33 @@ def _cmd_evaluate(args) -> int:
         print()
         print(groups_table(report["groups"]))
     if args.json:
-        Path(args.json).write_text(json.dumps(report, indent=2) + "\n")
+        write_file(Path(args.json), json.dumps(report, indent=2) + "\n")
     if args.motchallenge:
-        out = Path(args.motchallenge)
-        out.mkdir(parents=True, exist_ok=True)
         first = pair.first_frame or 0
-        write_motchallenge(out / "gt.txt", pair.gt_chunks(), groundtruth=True, first_frame=first)
-        write_motchallenge(out / "tracks.txt", pair.track_chunks(), groundtruth=False, first_frame=first)
+
+        def motchallenge(tmp: Path) -> None:
+            write_motchallenge(tmp / "gt.txt", pair.gt_chunks(), groundtruth=True, first_frame=first)
+            write_motchallenge(tmp / "tracks.txt", pair.track_chunks(), groundtruth=False, first_frame=first)
+
+        write_directory(Path(args.motchallenge), motchallenge, "--motchallenge")
     return 0
 
 
 def _cmd_evaluate_nav(args) -> int:
     from evaluation.navigation_report import evaluate_nav_main
 
+    _check_json(args)
     print(evaluate_nav_main([Path(d) for d in args.run_dirs], Path(args.json) if args.json else None))
     return 0
 
 
 def _cmd_navigate(args) -> int:
-    from scenarios import load_scenario
-
     from .navigate import navigate_main
 
-    scenario = load_scenario(args.scenario)
+    _check_json(args)
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise UsageError(f"--duration {args.duration}: expected a time above 0 s")
+    scenario = _load(args, args.scenario)
     print(navigate_main(scenario, args.planner, args.first_seed, args.seeds, args.duration,
                         Path(args.json) if args.json else None, workers=args.workers, progress=not args.quiet))
     return 0
@@ -143,14 +164,15 @@ def _cmd_report(args) -> int:
     from scenarios import load_scenario
     from scenarios.geometry import wall_segments
 
-    from .outdir import write_directory
+    from .outdir import check_out_dir, write_directory
 
     run_dir = Path(args.run_dir)
     for name in ("scenario.yaml", "groundtruth.csv", "tracks.csv"):
         if not (run_dir / name).is_file():
             raise EvaluationInputError(f"{run_dir}: no {name}; expected a run directory that `crowdsim run` wrote")
-    scenario = load_scenario(str(run_dir / "scenario.yaml"))
+    scenario = load_scenario(str(run_dir / "scenario.yaml"), allow_large=True)  # it ran as it is
     out = Path(args.out) if args.out else run_dir / "report"
+    check_out_dir(out)
     title = f"{scenario['name']}, seed {scenario['seed']}"
     tracking = write_directory(out, lambda tmp: write_report(tmp, run_dir, wall_segments(scenario),
                                                              scenario["evaluation"]["threshold"], title))
@@ -169,9 +191,7 @@ def _cmd_scenarios(args) -> int:
 
 
 def _cmd_validate_scenario(args) -> int:
-    from scenarios import load_scenario
-
-    sc = load_scenario(args.file)
+    sc = _load(args, args.file)
     counts = {k: len(sc[k]) for k in ("waypoints", "queues", "routes", "sources", "clusters", "standing")}
     walls = sum(len(w) - 1 for w in sc["map"]["walls"]) + sum(len(o) for o in sc["map"]["obstacles"])
     print(f"{args.file}: valid scenario {sc['name']!r}: {walls} wall segments, "
@@ -202,10 +222,7 @@ def _cmd_validate(args) -> int:
 
 
 def _cmd_bench(args) -> int:
-    from evaluation.io import EvaluationInputError
-
-    if args.json and Path(args.json).exists():
-        raise EvaluationInputError(f"--json {args.json}: already exists; expected a new file (nothing was measured)")
+    _check_json(args)
     if args.what == "sim":
         from .bench.sim import run_sim_benchmark
 
@@ -346,12 +363,24 @@ def _cmd_experiment(args) -> int:
 
 
 def _run_dir(args, name: str) -> Path:
-    """A command's output folder: ``--out``, or runs/<name>-<time>; checked to be new or empty before any work."""
+    """A command's output folder: ``--out``, or runs/<name>-<time> (the name made one safe file name); checked
+    before any work to be a new or empty folder this user can make."""
     from .outdir import check_out_dir
 
-    out = Path(args.out) if args.out else Path("runs") / f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
-    check_out_dir(out)
+    safe = re.sub(r"[^A-Za-z0-9_.-]", "_", name).lstrip(".")[:100] or "run"
+    out = args.out if args.out is not None else Path("runs") / f"{safe}-{time.strftime('%Y%m%d-%H%M%S')}"
+    check_out_dir(out)  # as given: "" is refused, not read as "."
+    out = Path(out)
+    args.kept = f"nothing was kept: {out} was not written"
     return out
+
+
+def _check_json(args) -> None:
+    """``--json``, when given, can take a new file: checked before any work."""
+    from .outdir import check_out_file
+
+    if args.json is not None:
+        check_out_file(Path(args.json), "--json")
 
 
 def _training_out(args) -> Path | None:
@@ -359,9 +388,10 @@ def _training_out(args) -> Path | None:
     scikit-learn is known to be there."""
     from .outdir import check_out_dir
 
-    out = Path(args.out) if args.out else None
-    if out is not None:
-        check_out_dir(out)
+    out = None
+    if args.out is not None:  # "" is refused, not taken for the shipped models' folder
+        check_out_dir(args.out)
+        out = Path(args.out)
     try:
         import sklearn  # noqa: F401
     except ImportError:
@@ -455,13 +485,11 @@ def _cmd_train_hog(args) -> int:
 
 
 def _cmd_dataset_generate(args) -> int:
-    from scenarios import load_scenario
-
     try:
         from .datasets.generate import generate
     except ImportError as e:
         raise UsageError(f"crowdsim dataset: needs {e.name}, of the data extra: pip install -e \".[data]\"") from None
-    scenarios = [load_scenario(name) for name in args.scenarios]
+    scenarios = [_load(args, name) for name in args.scenarios]
     manifest = generate(scenarios, args.scenarios, Path(args.out), args.episodes, seed=args.seed,
                         duration=args.duration, workers=args.workers, ray_address=args.ray, rate=args.rate_scale,
                         density=args.density_scale, route_jitter=args.route_jitter, compression=args.compression,
@@ -491,14 +519,13 @@ def _cmd_dataset_evaluate_detector(args) -> int:
     import json
 
     from .datasets.detection_eval import detection_table, evaluate_detector
-    from .datasets.layout import DatasetError
+    from .outdir import write_file
 
-    if args.json and Path(args.json).exists():
-        raise DatasetError(f"--json {args.json}: already exists; expected a new file (nothing was evaluated)")
+    _check_json(args)
     result = evaluate_detector(Path(args.folder), args.detector, args.split, min_beams=args.min_beams)
     print(detection_table([result]))
     if args.json:
-        Path(args.json).write_text(json.dumps(result.as_dict(), indent=1) + "\n")
+        write_file(Path(args.json), json.dumps(result.as_dict(), indent=1) + "\n")
     return 0
 
 
@@ -511,6 +538,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, help="override the scenario's duration (simulated seconds)")
     p.add_argument("--out", help="output directory (default runs/<scenario>-<time>); must be new or empty")
     p.add_argument("--rrd", action="store_true", help="also write a rerun recording, recording.rrd")
+    p.add_argument("--allow-large", action="store_true",
+                   help="run a scenario past the cost limits (steps, beams, pixels, grid cells, people) on purpose")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_run)
     p = sub.add_parser("evaluate", help="score any tracker's output (the CSV layout `crowdsim run` writes) against "
@@ -555,6 +584,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "when it names that type, else the type's defaults); default: the scenario's robot.planner")
     p.add_argument("--seeds", type=int, required=True, help="episodes: seeds S..S+N-1")
     p.add_argument("--first-seed", type=int, default=1, help="S, the suite's first seed (default 1)")
+    p.add_argument("--allow-large", action="store_true",
+                   help="run a scenario past the cost limits (steps, beams, pixels, grid cells, people) on purpose")
     p.add_argument("--duration", type=float, help="each episode's time limit in s (default: the scenario's duration)")
     p.add_argument("--workers", type=int, default=1, help="processes the seeds are shared among (default 1; 2 on "
                                                           "two cores)")
@@ -570,6 +601,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_scenarios)
     p = sub.add_parser("validate-scenario", help="check a scenario file and say what it holds")
     p.add_argument("file", help="a YAML scenario (or a bundled name)")
+    p.add_argument("--allow-large", action="store_true",
+                   help="run a scenario past the cost limits (steps, beams, pixels, grid cells, people) on purpose")
     p.set_defaults(func=_cmd_validate_scenario)
     p = sub.add_parser("validate", help="the crowd model against RiMEA tests 1, 4, 6, 7, Weidmann and bottlenecks")
     p.add_argument("--out", help="report directory (default runs/validation-<time>); must be new or empty")
@@ -660,6 +693,8 @@ def build_parser() -> argparse.ArgumentParser:
                                                        "SeedSequence(S).spawn(...)[k] (default 0)")
     p.add_argument("--duration", type=float, help="s recorded per episode (default: the scenario's)")
     p.add_argument("--workers", type=int, default=1, help="local processes (default 1)")
+    p.add_argument("--allow-large", action="store_true",
+                   help="run a scenario past the cost limits (steps, beams, pixels, grid cells, people) on purpose")
     p.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
                    help="run the episodes as Ray tasks: on the cluster at ADDRESS, or a local one (needs [ray]); "
                         "the folder must be one every node writes to")
@@ -696,21 +731,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
-    from evaluation.io import EvaluationInputError
-    from scenarios import ScenarioError
+# a write that failed for want of room: the disk or the user's quota full, or a file-size limit (ulimit -f)
+NO_ROOM = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
-    from .datasets.layout import DatasetError
-    from .outdir import RunDirError
+
+def main(argv: list[str] | None = None) -> int:
+    from .stops import Stopped, end_by, stops_as_exceptions
 
     args = build_parser().parse_args(argv)
-    with warnings.catch_warnings():  # restores the warning display on return
+    with warnings.catch_warnings(), stops_as_exceptions():  # both restored on return
         warnings.showwarning = _show_warning
         try:
             return args.func(args)
-        except (ScenarioError, RunDirError, EvaluationInputError, UsageError, DatasetError) as e:
+        except Error as e:
             print(f"crowdsim: error: {e}", file=sys.stderr)
             return 2
+        except OSError as e:
+            if e.errno not in NO_ROOM:
+                raise
+            print(f"crowdsim: error: {e.filename or 'a file'}: {e.strerror}; expected room to write the output "
+                  f"({getattr(args, 'kept', 'nothing was kept')})", file=sys.stderr)
+            return 2
+        except Stopped as e:
+            print(f"crowdsim: stopped by {e}; {getattr(args, 'kept', 'nothing was written')}", file=sys.stderr,
+                  flush=True)
+            signum = e.signum
+    end_by(signum)
+    return 128 + signum  # pragma: no cover - the signal ends the process first
 
 
 if __name__ == "__main__":

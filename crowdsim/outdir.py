@@ -16,17 +16,84 @@ import socket
 import tempfile
 from pathlib import Path
 
+from .errors import Error
+
 _TAG = "crowdsim-partial"
 
 
-class RunDirError(ValueError):
-    pass
+class RunDirError(Error):
+    """An output path that cannot take a command's output."""
 
 
-def check_out_dir(out: Path) -> None:
+NAME_MAX = 255  # bytes of one path component (Linux, macOS)
+PATH_MAX = 4096  # bytes of a whole path (Linux)
+
+
+def _where_made(path: Path, flag: str) -> Path:
+    """The nearest folder above ``path`` that exists, once ``path`` is known to have a legal name and to need no
+    file to hold a folder; RunDirError naming ``flag`` otherwise."""
+    text = str(path)
+    if "\0" in text or len(os.fsencode(text)) > PATH_MAX:
+        raise RunDirError(f"{flag} {text[:80]}...: not a legal path; expected at most {PATH_MAX} bytes, no NUL")
+    long = [part for part in path.parts if len(os.fsencode(part)) > NAME_MAX]
+    if long:
+        raise RunDirError(f"{flag} {text[:80]}...: a name of {len(os.fsencode(long[0]))} bytes; expected at most "
+                          f"{NAME_MAX} bytes for each name in the path")
+    for above in path.absolute().parents:
+        if above.exists():
+            if not above.is_dir():
+                raise RunDirError(f"{flag} {path}: {above} is a file; expected a folder there")
+            return above
+    return Path("/")  # pragma: no cover - the root exists
+
+
+def _can_write(folder: Path, path: Path, flag: str) -> None:
+    """A folder can be made in ``folder`` (tried: permissions, read-only and special file systems such as /proc)."""
+    try:
+        Path(tempfile.mkdtemp(prefix=f".{_TAG}-check-", dir=folder)).rmdir()
+    except OSError as e:
+        raise RunDirError(f"{flag} {path}: cannot write in {folder} ({e.strerror}); expected a folder this user can "
+                          f"write in") from None
+
+
+def check_out_dir(out: Path, flag: str = "--out") -> None:
+    """``out`` can take a command's output folder: a legal name, new or empty, in a place where this user can make
+    it. Checked before any work, so a command never fails at the end for its output's sake."""
+    if not str(out).strip():
+        raise RunDirError(f"{flag}: empty; expected the path of a folder (or leave the flag out for the default)")
+    out = Path(out)
+    folder = _where_made(out, flag)
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise RunDirError(f"--out {out}: already exists and is not empty; expected a new or empty directory "
+        raise RunDirError(f"{flag} {out}: already exists and is not empty; expected a new or empty directory "
                           f"(nothing was written)")
+    _can_write(folder, out, flag)
+
+
+def check_out_file(path: Path, flag: str) -> None:
+    """``path`` can take a new file: a legal name, nothing there yet, in a folder that exists and can be written."""
+    if not str(path).strip():
+        raise RunDirError(f"{flag}: empty; expected the path of a new file")
+    path = Path(path)
+    folder = _where_made(path, flag)
+    if path.exists() or path.is_symlink():
+        raise RunDirError(f"{flag} {path}: already exists; expected a new file (nothing was written)")
+    if folder != path.absolute().parent:
+        raise RunDirError(f"{flag} {path}: the folder {path.parent} does not exist; expected a file in an existing "
+                          "folder")
+    _can_write(folder, path, flag)
+
+
+def write_file(path: Path, text: str) -> None:
+    """``text`` into the new file ``path`` whole or not at all (written beside it, then moved into place)."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{_TAG}-{_host()}-{os.getpid()}-", dir=path.absolute().parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def _host() -> str:
@@ -61,12 +128,12 @@ def remove_stale(parent: Path) -> list[Path]:
     return removed
 
 
-def write_directory(out: Path, write):
+def write_directory(out: Path, write, flag: str = "--out"):
     """Call ``write(tmp)`` to fill a fresh temporary directory beside ``out`` and move it into place only when
     complete: a failure leaves nothing half-written, and an existing non-empty ``out`` is never touched.
-    Returns what ``write`` returns."""
+    Returns what ``write`` returns. ``flag`` names ``out`` in errors."""
     out = Path(out)
-    check_out_dir(out)
+    check_out_dir(out, flag)
     made = [p for p in reversed(out.absolute().parents) if not p.exists()]  # parents this creates
     out.parent.mkdir(parents=True, exist_ok=True)
     remove_stale(out.parent)

@@ -90,17 +90,60 @@ class Pipeline:
             part.reset()
 
 
+def _detections(out) -> bool:
+    return isinstance(out, DetectedPersons) or (isinstance(out, dict) and bool(out) and all(
+        isinstance(k, str) and isinstance(v, DetectedPersons) for k, v in out.items()))
+
+
+# what each role's method must return: (method, test, what to say was expected)
+RETURNS = {
+    "detector": ("detect", _detections, "DetectedPersons, or a dict of named DetectedPersons batches"),
+    "fusion": ("fuse", lambda out: isinstance(out, DetectedPersons), "DetectedPersons"),
+    "tracker": ("update", lambda out: isinstance(out, TrackedPersons), "TrackedPersons"),
+    "groups": ("update", lambda out: isinstance(out, tuple) and len(out) == 2 and isinstance(out[0], SocialRelations)
+               and isinstance(out[1], TrackedGroups), "a tuple (SocialRelations, TrackedGroups)"),
+}
+
+
+def check_outputs(part, role: str, source: str, key: str):
+    """``part`` (a user's) with its role's method checked: a wrong return type is one ScenarioError naming the
+    part's key and what was expected, not an AttributeError deep in the next part. The check is laid on the instance,
+    so the part keeps its own class."""
+    method, test, expected = RETURNS[role]
+    call = getattr(part, method)
+    name = f"{type(part).__module__}:{type(part).__qualname__}.{method}"
+
+    def checked(*args, **kwargs):
+        out = call(*args, **kwargs)
+        if not test(out):
+            raise ScenarioError(source, f"{key}.type", f"{name} returned {type(out).__name__}; expected {expected} "
+                                                       "(pipeline.types)")
+        return out
+
+    try:
+        setattr(part, method, checked)
+    except AttributeError:  # a class with __slots__: left as it is
+        pass
+    return part
+
+
 def build_part(spec: dict, registry: dict[str, type], source: str = "<pipeline>", key: str = "pipeline"):
-    """The part ``spec`` names (``type`` and the parameters), made from its built-in type or a user's class; a
-    parameter the part refuses (a model file that is not there, say) is a ScenarioError of ``source`` at ``key``."""
+    """The part ``spec`` names (``type`` and the parameters), made from its built-in type or a user's class (its
+    outputs checked, ``check_outputs``); a parameter the part refuses (a model file that is not there, say) is a
+    ScenarioError of ``source`` at ``key``."""
     params = {name: value for name, value in spec.items() if name != "type"}
     cls = registry[spec["type"]] if spec["type"] in registry else import_class(spec["type"])
     try:
-        return cls(**params)
+        part = cls(**params)
     except ScenarioError:
         raise
     except ValueError as e:
         raise ScenarioError(source, key, str(e)) from None
+    if spec["type"] in registry:
+        return part
+    role = next(role for role, known in (("detector", DETECTORS), ("fusion", FUSIONS), ("tracker", TRACKERS),
+                                         ("groups", GROUP_STAGES)) if known is registry)
+    return check_outputs(part, role, source, key)
 
 
 def build_pipeline(spec: dict, lasers: Sequence[str], floor_plan: dict | None = None,

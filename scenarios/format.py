@@ -13,6 +13,79 @@ from .schema import Field, ListOf, MapOf, Schema, Typed
 F = Field
 INIT_CONFIDENCE = 0.325  # the shipped robot-camera HOG model's track-start score (train-hog --camera robot prints it)
 
+
+# Checks across a part's keys, run when the file is loaded (scenarios.schema.Schema.checks): each takes the part's
+# validated values and returns None, or the key at fault and what was expected. They are the rules the parts'
+# constructors hold, so a file that breaks one gets one error naming the key before anything is built.
+
+def _ordered(low: str, high: str, strict: bool = False):
+    def check(p: dict):
+        if p[low] > p[high] or (strict and p[low] == p[high]):
+            return low, f"{p[low]:g}; expected {'below' if strict else 'at most'} {high} ({p[high]:g})"
+    return check
+
+
+def _extent(key: str):
+    def check(p: dict):
+        if min(p[key]) < 0:
+            return key, f"{p[key]}; expected a width and height of at least 0 m"
+    return check
+
+
+def _two_beams(p: dict):
+    """The laser's beams as sensors/laser.py counts them: a full circle has no last beam."""
+    beams = round(p["fov_deg"] / p["resolution_deg"]) + (0 if p["fov_deg"] >= 360.0 else 1)
+    if beams < 2:
+        return "resolution_deg", (f"{p['resolution_deg']:g} deg over fov_deg {p['fov_deg']:g} gives {beams} beam; "
+                                  "expected at least 2 beams (a finer resolution or a wider field of view)")
+
+
+def _sectors(p: dict):
+    if p["sectors"] % 4:
+        return "sectors", f"{p['sectors']}; expected a multiple of 4 (the nearness diagram's quadrants)"
+
+
+def _foreground_or_hog(p: dict):
+    if not (p["foreground"] or p["hog"]):
+        return "hog", "false with foreground false too; expected at least one of foreground and hog on"
+
+
+def _up_direction(p: dict):
+    if math.hypot(*p["up"]) < 1e-6:
+        return "up", f"{p['up']}; expected a direction (a non-zero vector), e.g. [0, -1, 0]: y is down in the image"
+
+
+def _imm_transition(p: dict):
+    k, T = len(p["imm_models"]), p["imm_transition"]
+    rows = [T[i * k:(i + 1) * k] for i in range(k)]
+    if (len(T) != k * k or any(abs(sum(r) - 1.0) > 1e-9 for r in rows)
+            or any(all(r[j] == 0 for r in rows) for j in range(k))):
+        return "imm_transition", (f"{T}; expected the {k} x {k} Markov matrix of the {k} imm_models, row-major: "
+                                  f"{k * k} numbers, each row summing to 1, each model reachable")
+
+
+def _outcomes_sum_to_one(p: dict):
+    total = p["p_det"] + p["p_occ"] + p["p_del"]
+    if abs(total - 1.0) > 1e-9:
+        return "p_del", f"p_det + p_occ + p_del = {total:g}; expected 1 (seed 000 Sec. IV-C)"
+
+
+def _rjmcmc_sources(p: dict):
+    w = p["weights"]
+    for key in ("proposal_sources", "likelihood_sources"):
+        if not any(w.get(s, 0.0) > 0 for s in p[key]):
+            return key, f"{p[key]}; expected at least one source with a positive weight under weights"
+    missing = [s for s in p["likelihood_sources"] if w.get(s, 0.0) > 0 and s not in p["clutter"]]
+    if p["likelihood"] == "pooled" and missing:
+        return "clutter", f"has no rate for {', '.join(missing)}; expected one for each likelihood source"
+
+
+def _move_probabilities(p: dict):
+    q = p["move_probabilities"]
+    if len(q) != 4 or abs(sum(q) - 1.0) > 1e-9:
+        return "move_probabilities", f"{q}; expected 4 values (add, update, remove, swap) summing to 1"
+
+
 AGENT_TYPE = Schema({
     "speed_mean": F("float", 1.34, min=0.0, doc="m/s, mean desired speed"),
     "speed_std": F("float", 0.26, min=0.0, doc="m/s, standard deviation of the desired speed"),
@@ -30,7 +103,10 @@ DEFAULT_AGENT_TYPES = {
 }
 
 CROWD = Schema({
-    "agent_types": F(MapOf(F(AGENT_TYPE)), DEFAULT_AGENT_TYPES, doc="type name -> speed distribution and size"),
+    "agent_types": F(MapOf(F(AGENT_TYPE), by_name=True), DEFAULT_AGENT_TYPES,
+                     doc="type name -> speed distribution and size; merged by name into the default types (adult, "
+                         "child, elder): `NAME: !remove` drops one, `agent_types: !replace {...}` keeps only those "
+                         "given"),
     "max_speed_factor": F("float", 1.3, min=1.0, doc="maximum speed = factor x desired speed (Helbing & Molnar 1995)"),
     "relaxation_time": F("float", 0.5, min=0.0, exclusive_min=True, doc="s, tau of the desired force (HM 1995)"),
     "interaction": F("str", "moussaid2009", choices=("moussaid2009", "helbing_molnar1995"),
@@ -86,7 +162,7 @@ ATTRACTION = Schema({
     "strength": F("float", 1.0, min=0.0, doc="appeal: a passer-by within reach is drawn at strength x 0.05 /s"),
     "reach": F("float", 3.0, min=0.0, doc="m, how near the area a walker must pass to be drawn"),
     "visit_time": F("float", 10.0, min=0.0, doc="s, mean of the exponential time spent there"),
-})
+}, checks=(_extent("size"),))
 
 CLUSTER = Schema({
     "position": F("point", required=True, doc="m, centre of the area the persons start in (PedSim <agent>)"),
@@ -96,7 +172,7 @@ CLUSTER = Schema({
     "agent_type": F("str", "adult", doc="agent type of the persons"),
     "group_size_weights": F(ListOf(F("float", min=0.0), min_items=1), [1.0],
                             doc="relative weights of group sizes 1, 2, 3, ... the persons walk in"),
-})
+}, checks=(_extent("spread"),))
 
 ROUTE = Schema({
     "waypoints": F(ListOf(F("str"), min_items=1), required=True,
@@ -114,7 +190,7 @@ SOURCE = Schema({
     "group_size_weights": F(ListOf(F("float", min=0.0), min_items=1), [1.0],
                             doc="relative weights of group sizes 1, 2, 3, ..."),
     "agent_types": F(MapOf(F("float", min=0.0)), {"adult": 1.0}, doc="agent type name -> relative weight"),
-})
+}, checks=(_extent("size"),))
 
 STANDING = Schema({
     "position": F("point", required=True, doc="m, centre of the standing group"),
@@ -170,8 +246,8 @@ PLANNER_TYPES = {
         "yield_time": F("float", 2.0, min=0.0,
                         doc="s, give way to a passer-by crossing the robot's course ahead within this time (0: "
                             "never; an addition to seed 001, pipeline/navigation/planners.py)"),
-    }),
-    "nd": Schema(ND_PLANNER),
+    }, checks=(_sectors,)),
+    "nd": Schema(ND_PLANNER, checks=(_sectors,)),
     "straight": Schema({
         **PLANNER_COMMON,
         "safety_distance": F("float", 0.6, min=0.0, doc="m, stop for a laser return this near ahead (robot.safety_distance)"),
@@ -222,7 +298,7 @@ TAG = Schema({
     "range_sd": F("float", 0.5, min=0.0, doc="m, range error sd (an assumption: coarse)"),
     "bearing_sd_deg": F("float", 20.0, min=0.0, doc="deg, bearing error sd (an assumption: one antenna lobe)"),
     "detection_probability": F("float", 0.9, min=0.0, max=1.0, doc="chance a due reading is had (an assumption)"),
-})
+}, checks=(_ordered("range_min", "range_max", strict=True),))
 
 ROBOT = Schema({
     "start": F("pose", required=True, doc="m, m, rad: initial pose in the world frame"),
@@ -276,7 +352,7 @@ LASER = Schema({
                doc="range error bands, nearest first; beyond the last, the last applies (SICK LMS5xx HR)"),
     "no_return": F("str", "nan", choices=("nan", "range_max"),
                    doc="what a beam without a return reads: NaN, or range_max as many drivers report"),
-}, presets=LASER_PRESETS)
+}, presets=LASER_PRESETS, checks=(_two_beams,))
 
 # Kinect-like RGB-D cameras (Microsoft Kinect / Asus Xtion: 640 x 480 at up to 30 Hz, 43 degrees vertical field of
 # view, about 0.5-8 m; Khoshelham & Elberink 2012); the 160 x 120 variant is the same camera at a quarter resolution.
@@ -374,7 +450,7 @@ LEG_DETECTOR = Schema({
     "blob_min_radius": F("float", 0.03, min=0.0, doc="m, least half-width of a raw blob (thinner: a table leg)"),
     "blob_max_radius": F("float", 0.3, min=0.0, doc="m, largest half-width of a raw blob (wider: a wall)"),
     "position_variance": F("float", 0.05, min=0.0, exclusive_min=True, doc="m^2, of each person's position"),
-})
+}, checks=(_ordered("min_width", "max_width"), _ordered("min_angle_deg", "max_angle_deg")))
 
 # seed 001 Sec. 4.2-4.3 names the methods (Sigma-Delta, morphology, an aspect ratio; HOG) but gives no parameter
 WALL_CAMERA_DETECTOR = Schema({
@@ -383,7 +459,7 @@ WALL_CAMERA_DETECTOR = Schema({
     "model": F("str", None, optional=True,
                doc="the HOG model: left out, the shipped one (`crowdsim experiment train-hog`); or the path of the "
                    ".npz it wrote with --out"),
-    "hog_scales": F(ListOf(F("float", min=0.1)), [float(1.2 ** k) for k in range(8)],
+    "hog_scales": F(ListOf(F("float", min=0.1), min_items=1), [float(1.2 ** k) for k in range(8)],
                     doc="window scales searched (1: 64 x 128 pixels); the default covers a person 2.2-8 m from a "
                         "640 x 480 camera at 45 degrees"),
     "bootstrap": F("int", 15, min=1, doc="frames whose median starts the background model (no detection before)"),
@@ -395,7 +471,7 @@ WALL_CAMERA_DETECTOR = Schema({
                           "0.26 m and a margin for the foot point's error)"),
     "position_variance": F("float", 0.09, min=0.0, exclusive_min=True,
                            doc="m^2 along the floor (seed 001 Table 1: Sigma = diag(0.09, 0.09))"),
-})
+}, checks=(_foreground_or_hog,))
 
 # seed 003's RGB-D detector (Munaro & Menegatti Sec. 3); the paper gives the head distance and voxels under 0.1 m
 # (Table 7), the rest are its authors' released code's (PCL's ground-based people detection), see
@@ -426,7 +502,7 @@ RGBD_DETECTOR = Schema({
                           "colour_space must be the same"),
     "position_variance": F("float", 0.036, min=0.0, exclusive_min=True,
                            doc="m^2 along the floor (the authors' later tracker: 30 (2 voxel)^2 / 12 at 0.06 m)"),
-})
+}, checks=(_up_direction,))
 
 DETECTOR_TYPES = {"laser_segments": SEGMENT_DETECTOR, "laser_learned": LEARNED_DETECTOR, "laser_legs": LEG_DETECTOR,
                   "wall_people": WALL_CAMERA_DETECTOR, "rgbd_people": RGBD_DETECTOR}
@@ -495,7 +571,7 @@ NNT = Schema({
                         doc="the IMM's Markov matrix, row-major, one row per imm_models entry, rows summing to 1: "
                             "entry (i, j) is the chance that model i is followed by model j at the next cycle "
                             "(seed 000: none; staying 0.95 keeps a mode for 0.8 s at 25 Hz)"),
-})
+}, checks=(_ordered("v_min", "v_max", strict=True), _imm_transition))
 
 MHT = Schema({
     "process_noise": F("float", 0.267, min=0.0, exclusive_min=True,
@@ -518,7 +594,7 @@ MHT = Schema({
                             "not depend on the machine (about 0.03 s with 80 people; pipeline/tracking/mht.py)"),
     "n_confirm": F("int", 3, min=1, doc="detections before a track is output (the NNT's)"),
     "initial_velocity_variance": F("float", 1.0, min=0.0, exclusive_min=True, doc="m^2/s^2 of a new track"),
-})
+}, checks=(_outcomes_sum_to_one,))
 
 # seed 001's RJMCMC particle filter (pipeline/tracking/rjmcmc.py; its Table 1 unless said; a test keeps these
 # defaults equal to the class's)
@@ -566,7 +642,7 @@ RJMCMC = Schema({
     "reid_threshold": F("float", 0.1, min=0.0, max=1.0, doc="beta_o: a new id this close to a gone person's model "
                                                              "takes their id"),
     "seed": F("int", 0, doc="the filter's random stream (one run = one draw; seed 001 reports eight)"),
-})
+}, checks=(_rjmcmc_sources, _move_probabilities))
 
 # seed 003's tracker (pipeline/tracking/rgbd_tracker.py): Table 7 where it gives a value, else the authors' later
 # OpenPTrack's (tracker.yaml) and their AdaBoost demo's; a test keeps these defaults equal to the class's

@@ -2,28 +2,43 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
-import yaml
 
 from .format import DETECTOR_READS, SCENARIO
 from .geometry import closest_on_segments, inside_polygon, wall_segments
 from .pedsim import pedsim_to_scenario
-from .schema import ScenarioError, validate
+from .reader import Replace, read_yaml
+from .schema import REMOVE, Field, MapOf, Schema, ScenarioError, Typed, validate
 
 BUNDLED = Path(__file__).parent / "bundled"
+MIN_EXTENT = 1.0  # m, walls whose extent is narrower than this in x or y (a single wall) bound no area
+SENSOR_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}")
+
+
+# words a full stop follows without ending a sentence ("seed 003 Sec. 2", "et al. 2014")
+ABBREVIATIONS = {"sec", "secs", "fig", "figs", "eq", "eqs", "tab", "no", "vs", "e.g", "i.e", "al", "cf", "approx",
+                 "ch", "pp", "vol", "resp"}
+
+
+def first_sentence(text: str) -> str:
+    """The first sentence of ``text``, whole: it ends at a full stop (or ! or ?) before a space or the end that
+    does not close an abbreviation or an initial."""
+    text = " ".join(text.split())
+    for stop in re.finditer(r"[.!?](?= |$)", text):
+        word = re.split(r"[\s(]", text[:stop.start()])[-1]
+        if stop.group() != "." or not (word.lower() in ABBREVIATIONS or re.fullmatch(r"[A-Z]", word)):
+            return text[:stop.end()]
+    return text + "." if text else ""
 
 
 def bundled_scenarios() -> dict[str, str]:
     """Bundled scenario name -> the first sentence of its description."""
-    out = {}
-    for path in sorted(BUNDLED.glob("*.yaml")):
-        with open(path) as f:
-            description = (yaml.safe_load(f) or {}).get("description", "")
-        first = description.strip().split("\n")[0]
-        out[path.stem] = first.split(". ")[0].rstrip(".") + "."
-    return out
+    return {path.stem: first_sentence(str((read_yaml(path) or {}).get("description", "")))
+            for path in sorted(BUNDLED.glob("*.yaml"))}
 
 
 def resolve(name_or_path: str) -> Path:
@@ -42,54 +57,107 @@ def resolve(name_or_path: str) -> Path:
                         f"not a bundled scenario, a YAML file nor a PedSim XML file; bundled: {names}")
 
 
-def merge(base: dict, changes: dict) -> dict:
-    """``base`` with ``changes`` laid over it: mappings merge key by key, anything else is replaced."""
+def _inner(spec: Any) -> Any:
+    while isinstance(spec, Field):
+        spec = spec.kind
+    return spec
+
+
+def merge(base: Any, changes: Any, spec: Any = SCENARIO) -> Any:
+    """``base`` with ``changes`` laid over it, as the format ``spec`` reads them: mappings merge key by key; a part
+    given another ``type`` than its base's is replaced whole (the old type's keys do not carry over), as is a
+    mapping tagged ``!replace``; a key tagged ``!remove`` is dropped; lists and plain values are replaced."""
+    spec = _inner(spec)
+    if isinstance(changes, Replace) or not (isinstance(changes, dict) and isinstance(base, dict)):
+        return changes
+    if isinstance(spec, Typed):
+        old = base.get("type", spec.default)
+        if changes.get("type", old) != old:
+            return changes
+        spec = spec.types.get(old)  # a class of one's own: merged key by key, its keys unknown here
     out = dict(base)
     for key, value in changes.items():
-        out[key] = merge(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) else value
+        if value is REMOVE:
+            out.pop(key, None)
+            continue
+        sub = spec.fields[key] if isinstance(spec, Schema) and key in spec.fields else (
+            spec.item if isinstance(spec, MapOf) else None)
+        out[key] = merge(out[key], value, sub) if key in out else value
     return out
 
 
-def read_raw(path: Path, seen: tuple = ()) -> dict:
-    """The file's data, with ``base: NAME_OR_PATH`` resolved: the base scenario's data, then this file's over it."""
+def _paths(value: Any, key: str = ""):
+    """The key paths of ``value`` as errors name them (``a.b``, ``a[0]``)."""
+    if isinstance(value, dict):
+        for k, v in value.items():
+            sub = f"{key}.{k}" if key else str(k)
+            yield sub
+            yield from _paths(v, sub)
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            yield f"{key}[{i}]"
+            yield from _paths(v, f"{key}[{i}]")
+
+
+def read_raw(path: Path) -> dict:
+    """The file's data, with ``base: NAME_OR_PATH`` resolved: the base scenario's data, then this file's laid over
+    it by ``merge``."""
+    return _read(path)[0]
+
+
+def _read(path: Path, seen: tuple = ()) -> tuple[dict, dict[str, str]]:
+    """``read_raw``'s data, and for each key path the file that gave it last (empty without a base)."""
     source = str(path)
-    try:
-        with open(path, encoding="utf-8") as f:
-            raw = yaml.safe_load(f)
-    except yaml.YAMLError as e:
-        mark = getattr(e, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(e, "problem", None) or str(e).splitlines()[0]
-        raise ScenarioError(source, "<file>", f"not valid YAML{where}: {problem}") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise ScenarioError(source, "<file>", f"cannot be read as UTF-8 text: {e}") from None
+    raw = read_yaml(path)
     if not isinstance(raw, dict):
         raise ScenarioError(source, "<top level>", "expected a mapping of keys")
-    if "base" in raw:
-        name = raw.pop("base")
-        if not isinstance(name, str):
-            raise ScenarioError(source, "base", f"expected a scenario name or path, got {name!r}")
-        local = path.parent / name
+    if "base" not in raw:
+        return raw, {}
+    name = raw.pop("base")
+    if not isinstance(name, str):
+        raise ScenarioError(source, "base", f"expected a scenario name or path, got {name!r}")
+    local = path.parent / name
+    try:
         base_path = resolve(str(local) if local.suffix in (".yaml", ".yml") and local.is_file() else name)
-        if base_path.resolve() in seen:
-            raise ScenarioError(source, "base", f"{name!r} leads back to this file; expected no cycle")
-        raw = merge(read_raw(base_path, seen + (path.resolve(),)), raw)
-    return raw
+    except ScenarioError as e:
+        raise ScenarioError(source, "base", f"{name!r}: {e.message}") from None
+    if base_path.resolve() in seen:
+        raise ScenarioError(source, "base", f"{name!r} leads back to this file; expected no cycle")
+    base, origins = _read(base_path, seen + (path.resolve(),))
+    merged, given = merge(base, raw), set(_paths(raw))
+    return merged, {p: source if p in given else origins.get(p, str(base_path)) for p in _paths(merged)}
 
 
-def load_scenario(name_or_path: str, **overrides) -> dict:
+def _from_base(error: ScenarioError, origins: dict[str, str]) -> ScenarioError:
+    """``error``, saying so when the key at fault came from a base scenario (the nearest key path a file gave)."""
+    key = error.key
+    while key and key not in origins:
+        key = re.sub(r"(\.[^.\[\]]*|\[\d+\])$", "", key) if re.search(r"[.\]]", key) else ""
+    origin = origins.get(key)
+    if origin is None or origin == error.source:
+        return error
+    return ScenarioError(error.source, error.key, f"{error.message} ({key} comes from the base scenario {origin}; "
+                                                  f"expected it overridden in {error.source} or fixed there)")
+
+
+def load_scenario(name_or_path: str, allow_large: bool = False, **overrides) -> dict:
     """The validated scenario as plain data, defaults filled in; ``overrides`` replace top-level keys. A ``.xml``
-    path is read as a PedSim scenario (``scenarios.pedsim``)."""
+    path is read as a PedSim scenario (``scenarios.pedsim``). ``allow_large`` lets a scenario past the cost limits
+    run (scenarios/costs.py)."""
     path = resolve(name_or_path)
+    origins: dict[str, str] = {}
     if path.suffix.lower() == ".xml":
         raw = pedsim_to_scenario(path)
     else:
-        raw = read_raw(path)
+        raw, origins = _read(path)
     raw.update({k: v for k, v in overrides.items() if v is not None})
-    return scenario_from_dict(raw, str(path))
+    try:
+        return scenario_from_dict(raw, str(path), allow_large)
+    except ScenarioError as e:
+        raise _from_base(e, origins) from None
 
 
-def scenario_from_dict(raw: dict, source: str = "<scenario>") -> dict:
+def scenario_from_dict(raw: dict, source: str = "<scenario>", allow_large: bool = False) -> dict:
     """Validate scenario data given as a dict (as a YAML file would hold it); ``source`` names it in errors."""
     scenario = validate(raw, SCENARIO, source)
     check_geometry(scenario, source)
@@ -131,11 +199,19 @@ def check_detectors(scenario: dict, source: str) -> None:
     if pipeline["cycle"] != "lasers" and pipeline["cycle"] not in cameras:
         raise ScenarioError(source, "pipeline.cycle", f"{pipeline['cycle']!r}; expected lasers or a depth camera's "
                                                       f"name: {', '.join(['lasers', *cameras])}")
+    colour = {s["name"]: (f"sensors.{kind}[{i}].rgb", s["rgb"]) for kind in ("depth_cameras", "wall_cameras")
+              for i, s in enumerate(scenario["sensors"][kind])}
     for key, spec, kind, what in attached:
         reads = DETECTOR_READS.get(spec["type"], kind)  # a class of one's own reads what it is given
         if reads != kind:
             raise ScenarioError(source, f"{key}.type", f"{spec['type']} reads sensors.{reads}, and {what} is one of "
                                                        f"sensors.{kind}; expected a detector for sensors.{kind}")
+        needs_colour = spec["type"] == "wall_people" or (spec["type"] == "rgbd_people" and spec["hog"])
+        camera, rgb = colour.get(what, ("", True))
+        if needs_colour and not rgb:
+            raise ScenarioError(source, camera, f"false, and {key} ({spec['type']}) needs this camera's colour images; "
+                                                "expected true" + ("" if spec["type"] == "wall_people" else
+                                                                   f", or {key}.hog: false"))
 
 
 def check_driver(scenario: dict, source: str) -> None:
@@ -229,6 +305,9 @@ def check_geometry(scenario: dict, source: str) -> None:
     for kind in ("lasers", "depth_cameras", "wall_cameras"):
         for i, sensor in enumerate(scenario["sensors"][kind]):
             key = f"sensors.{kind}[{i}].name"
+            if not SENSOR_NAME.fullmatch(sensor["name"]):
+                raise ScenarioError(source, key, f"{sensor['name']!r}; expected a name of letters, digits and _ . - "
+                                                 "(it names the sensor's frame, its MuJoCo body and its files)")
             if sensor["name"] in seen or sensor["name"] in ("robot", "floor"):
                 raise ScenarioError(source, key, f"{sensor['name']!r} is taken ({seen.get(sensor['name'], 'reserved')})"
                                                  "; expected a name of its own for every sensor")
@@ -236,33 +315,95 @@ def check_geometry(scenario: dict, source: str) -> None:
             check_sensor(sensor, f"sensors.{kind}[{i}]", scenario["dt"], source)
     check_detectors(scenario, source)
     check_driver(scenario, source)
+    check_places(scenario, source)
+
+
+def _outer_boundary(walls: list) -> np.ndarray | None:
+    """The largest closed wall polyline (first point = last), the map's outer wall where it closes; else None."""
+    closed = [np.asarray(w, float)[:-1] for w in walls if len(w) > 3 and w[0] == w[-1]]
+    if not closed:
+        return None
+    area = [abs(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])) / 2 for p in closed]
+    return closed[int(np.argmax(area))]
+
+
+def check_places(scenario: dict, source: str) -> None:
+    """Every place a person, the robot or a camera is put lies in the map's free space: outside every obstacle, and,
+    for places a body stands on, at least its radius from every wall. Where people stay or start (standing
+    persons, a cluster's start area, a source's area, the robot, its goals and route, the follow target's start) and
+    wall cameras must also lie within the map: inside the outer wall where it closes, else within the walls' extent.
+    Waypoints and queues may lie beyond it (an exit outside a door)."""
     segs = wall_segments(scenario)
-    radius = max(t["radius"] for t in types.values()) if types else 0.25
-    places = [(f"waypoints.{n}.position", w["position"], "goal") for n, w in scenario["waypoints"].items()]
-    places += [(f"queues.{n}.position", q["position"], "queue") for n, q in scenario["queues"].items()]
-    places += [(f"sources[{i}].position", s["position"], "source") for i, s in enumerate(scenario["sources"])]
-    places += [(f"standing[{i}].position", s["position"], "standing place") for i, s in enumerate(scenario["standing"])]
-    places += [("robot.start", scenario["robot"]["start"][:2], "robot start")]
-    places += [(f"robot.route[{i}]", p, "robot waypoint") for i, p in enumerate(scenario["robot"]["route"] or [])]
-    target = (scenario["robot"]["follow"] or {}).get("target")
-    if target is not None:
-        places += [("robot.follow.target.start", target["start"], "the target's start")]
-    clearance = np.full(len(places), radius)
-    what_clearance = ["the largest body radius"] * len(places)
-    # a goal the robot's centre must come within goal_radius of: its disc must fit there, or a wall is in the way
-    goals = (scenario["robot"]["goals"] or []) if scenario["robot"]["driver"] == "goals" else []
-    places += [(f"robot.goals[{i}]", p, "robot goal") for i, p in enumerate(goals)]
-    clearance = np.r_[clearance, np.full(len(goals), scenario["robot"]["radius"])]
-    what_clearance += ["robot.radius"] * len(goals)
-    if not places or len(segs) == 0:
+    if len(segs) == 0:
         return
-    pts = np.array([p for _, p, _ in places], float)
+    body = max((t["radius"] for t in scenario["crowd"]["agent_types"].values()), default=0.25)
+    robot = scenario["robot"]
+    places = []  # (key, point, what, clearance, what the clearance is, whether it must lie within the map)
+
+    def add(key, point, what, clearance=body, why="the largest body radius", in_map=True):
+        places.append((key, [float(c) for c in point[:2]], what, clearance, why, in_map))
+
+    def area(key, centre, size, what, in_map=True):  # an area's corners lie in the map (clearance 0)
+        half = np.asarray(size, float) / 2
+        for corner in ([-1, -1], [1, -1], [1, 1], [-1, 1]):
+            add(key, np.asarray(centre) + half * corner, f"a corner of {what}", 0.0, "", in_map)
+
+    for n, w in scenario["waypoints"].items():
+        add(f"waypoints.{n}.position", w["position"], "goal", in_map=False)
+    for n, q in scenario["queues"].items():
+        add(f"queues.{n}.position", q["position"], "queue", in_map=False)
+    for i, src in enumerate(scenario["sources"]):
+        add(f"sources[{i}].position", src["position"], "source")
+        area(f"sources[{i}].size", src["position"], src["size"], "the source's area")
+    for i, g in enumerate(scenario["standing"]):
+        add(f"standing[{i}].position", g["position"], "standing place")
+    for i, c in enumerate(scenario["clusters"]):  # a cluster may wait outside a door; one inside stays inside
+        add(f"clusters[{i}].position", c["position"], "cluster", in_map=False)
+        area(f"clusters[{i}].spread", c["position"], c["spread"], "the cluster's start area",
+             _within(scenario, segs, c["position"]))
+    add("robot.start", robot["start"], "robot start", robot["radius"], "robot.radius")
+    for i, p in enumerate(robot["route"] or []):
+        add(f"robot.route[{i}]", p, "robot waypoint", in_map=False)
+    target = (robot["follow"] or {}).get("target")
+    if target is not None:
+        add("robot.follow.target.start", target["start"], "the target's start")
+    # a goal the robot's centre must come within goal_radius of: its disc must fit there, or a wall is in the way
+    for i, p in enumerate(robot["goals"] or [] if robot["driver"] == "goals" else []):
+        add(f"robot.goals[{i}]", p, "robot goal", robot["radius"], "robot.radius")
+    for i, camera in enumerate(scenario["sensors"]["wall_cameras"]):
+        add(f"sensors.wall_cameras[{i}].position", camera["position"], "wall camera", 0.0, "")
+    pts = np.array([place[1] for place in places], float)
     dist = closest_on_segments(pts, segs)[1].min(axis=1)
     inside = np.zeros(len(pts), bool)
     for poly in scenario["map"]["obstacles"]:
         inside |= inside_polygon(pts, np.asarray(poly, float))
-    for (key, p, what), d, ins, need, why in zip(places, dist, inside, clearance, what_clearance):
+    within = _within(scenario, segs, pts)
+    lo, hi = segs.reshape(-1, 2).min(axis=0), segs.reshape(-1, 2).max(axis=0)
+    outer = _outer_boundary(scenario["map"]["walls"])
+    for (key, p, what, need, why, in_map), d, ins, ok in zip(places, dist, inside, within):
+        if in_map and not ok:
+            extent = (f"inside the outer wall" if outer is not None else
+                      f"within the walls' extent x {lo[0]:g}..{hi[0]:g} m, y {lo[1]:g}..{hi[1]:g} m")
+            raise ScenarioError(source, key, f"{what} {_point(p)} lies outside the map; expected it {extent}")
         if ins or d < need:
             where = "inside an obstacle" if ins else f"{d:.2f} m from a wall"
-            raise ScenarioError(source, key, f"{what} {p} lies inside a wall ({where}); expected at least "
+            raise ScenarioError(source, key, f"{what} {_point(p)} lies inside a wall ({where}); expected at least "
                                              f"{need:g} m ({why}) of clearance from every wall")
+
+
+def _within(scenario: dict, segs: np.ndarray, points) -> np.ndarray:
+    """Whether each point lies within the map: inside its outer wall where it closes (or on it), else within the
+    walls' extent."""
+    pts = np.atleast_2d(np.asarray(points, float))
+    lo, hi = segs.reshape(-1, 2).min(axis=0), segs.reshape(-1, 2).max(axis=0)
+    within = np.all((pts >= lo - 1e-9) & (pts <= hi + 1e-9), axis=1)
+    if np.any(hi - lo < MIN_EXTENT):  # walls in a line bound no area: nothing to lie outside of
+        within[:] = True
+    outer = _outer_boundary(scenario["map"]["walls"])
+    if outer is not None:
+        within &= inside_polygon(pts, outer) | (closest_on_segments(pts, segs)[1].min(axis=1) < 1e-9)
+    return within if np.ndim(points) > 1 else bool(within[0])
+
+
+def _point(p) -> str:
+    return "[" + ", ".join(f"{c:g}" for c in p) + "]"

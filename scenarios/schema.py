@@ -13,8 +13,20 @@ import re
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from .errors import Error
 
-class ScenarioError(ValueError):
+
+class _Remove:
+    """The value of a key tagged ``!remove`` in a scenario file (scenarios/reader.py): the key is left out."""
+
+    def __repr__(self) -> str:
+        return "!remove"
+
+
+REMOVE = _Remove()
+
+
+class ScenarioError(Error):
     """A scenario file (or argument) that does not satisfy the schema."""
 
     def __init__(self, source: str, key: str, message: str):
@@ -53,6 +65,8 @@ class Schema:
     fields: dict[str, Field]
     presets: dict[str, dict] | None = None
     legacy: dict[str, str] | None = None
+    # checks across the mapping's keys, run on its validated values: each returns None, or (key, what was expected)
+    checks: tuple[Callable[[dict], tuple[str, str] | None], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -63,9 +77,12 @@ class ListOf:
 
 @dataclass(frozen=True)
 class MapOf:
-    """A mapping from user-chosen names to items of one schema."""
+    """A mapping from user-chosen names to items of one schema. With ``by_name``, a given mapping merges by name
+    into the field's default one (a named item over the default item of that name, the given names first; ``name:
+    !remove`` drops a default item; a mapping tagged ``!replace`` replaces the defaults whole)."""
 
     item: Any
+    by_name: bool = False
 
 
 @dataclass(frozen=True)
@@ -103,6 +120,9 @@ def import_class(path: str) -> type:
     return cls
 
 
+INT_LIMIT = 2 ** 63  # integers pass to numpy as int64
+
+
 def _is_number(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
@@ -128,17 +148,24 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
         kind = spec.kind
         if spec.optional and value is None:
             return None
+        if isinstance(kind, MapOf) and kind.by_name and isinstance(spec.default, dict):
+            value = _by_name(spec.default, value)
         if isinstance(kind, (Schema, ListOf, MapOf, Typed)):
             out = validate(value, kind, source, key)
         elif kind == "float":
             if not _is_number(value):
                 raise err(f"expected a number, got {_describe(value)}")
-            out = float(value)
+            try:
+                out = float(value)
+            except OverflowError:  # an integer of hundreds of digits
+                raise err(f"expected a finite number, got an integer of {len(str(abs(value)))} digits") from None
             if math.isnan(out) or (math.isinf(out) and not spec.allow_inf):
                 raise err(f"expected a finite number, got {out!r}")
         elif kind == "int":
             if not isinstance(value, int) or isinstance(value, bool):
                 raise err(f"expected an integer, got {_describe(value)}")
+            if not -INT_LIMIT < value < INT_LIMIT:
+                raise err(f"expected an integer of at most 18 digits, got one of {len(str(abs(value)))}")
             out = value
         elif kind == "str":
             if not isinstance(value, str):
@@ -175,6 +202,7 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
             value = {}
         if not isinstance(value, dict):
             raise err(f"expected a mapping of keys, got {_describe(value)}")
+        value = {k: v for k, v in value.items() if v is not REMOVE}  # ``!remove``: left out, the default applies
         unknown = [k for k in value if k not in spec.fields]
         if unknown:
             k = unknown[0]
@@ -200,18 +228,34 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
                 out[name] = validate({}, field.kind, source, sub)
             else:
                 out[name] = field.default
+        for check in spec.checks:
+            fault = check(out)
+            if fault is not None:
+                sub, message = fault
+                raise ScenarioError(source, f"{key}.{sub}" if key else sub, message)
         return out
     if isinstance(spec, ListOf):
         if not isinstance(value, list):
             raise err(f"expected a list, got {_describe(value)}")
         if len(value) < spec.min_items:
             raise err(f"expected at least {spec.min_items} item(s), got {len(value)}")
+        if any(v is REMOVE for v in value):
+            raise err("!remove tags a list item; expected it on a key of a mapping (a list is replaced whole)")
         return [validate(v, spec.item, source, f"{key}[{i}]") for i, v in enumerate(value)]
     if isinstance(spec, MapOf):
         if not isinstance(value, dict):
             raise err(f"expected a mapping of names to entries, got {_describe(value)}")
-        return {str(k): validate(v, spec.item, source, f"{key}.{k}") for k, v in value.items()}
+        return {str(k): validate(v, spec.item, source, f"{key}.{k}") for k, v in value.items() if v is not REMOVE}
     raise TypeError(f"unknown spec {spec!r}")  # pragma: no cover
+
+
+def _by_name(default: dict, value: Any) -> Any:
+    """``value`` merged by name into ``default`` (``MapOf.by_name``); anything but a plain mapping as it is."""
+    if type(value) is not dict:  # a !replace mapping, or a fault the validation names
+        return value
+    merged = {name: {**default[name], **item} if isinstance(item, dict) and name in default else item
+              for name, item in value.items()}
+    return {**merged, **{name: item for name, item in default.items() if name not in value}}
 
 
 def _move_legacy(value: dict, old: str, new: str, field: Field, source: str, key: str) -> dict:
@@ -247,8 +291,8 @@ def _validate_typed(value: Any, spec: Typed, source: str, key: str) -> dict:
             params = {k: v for k, v in value.items() if k != "type"}
             _check_signature(cls, name, params, source, key)
             return {"type": name, **params}
-    return validate(value, Schema({"type": spec.type_field(), **schema.fields}, schema.presets, schema.legacy),
-                    source, key)
+    return validate(value, Schema({"type": spec.type_field(), **schema.fields}, schema.presets, schema.legacy,
+                                  schema.checks), source, key)
 
 
 def _user_class(name: str, spec: Typed, source: str, key: str) -> type:

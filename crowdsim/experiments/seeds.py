@@ -1,12 +1,11 @@
 """One function of a seed over many seeds, in order, with a progress bar: in the calling process, or in ``workers``
-spawned processes (each a fresh interpreter: MuJoCo's and the BLAS's threads are not forked)."""
+worker processes (crowdsim/workers.py)."""
 
 from __future__ import annotations
 
-from concurrent.futures import ProcessPoolExecutor
-from multiprocessing import get_context
-
 from tqdm import tqdm
+
+from ..workers import process_pool
 
 
 def map_seeds(fn, seeds: list[int], *args, workers: int = 1, desc: str = "seeds", progress: bool = True) -> list:
@@ -18,7 +17,7 @@ def map_seeds(fn, seeds: list[int], *args, workers: int = 1, desc: str = "seeds"
                 out.append(fn(seed, *args))
                 bar.update()
             return out
-        with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
+        with process_pool(workers) as pool:
             for result in pool.map(fn, seeds, *([a] * len(seeds) for a in args)):
                 out.append(result)
                 bar.update()

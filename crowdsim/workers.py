@@ -1,0 +1,36 @@
+"""Local worker processes for the many-run commands: spawned (a fresh interpreter each: MuJoCo's and the BLAS's
+threads are not forked), deaf to stops (crowdsim/stops.py), and ended at once when the main process stops or fails,
+rather than waited for."""
+
+from __future__ import annotations
+
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
+from multiprocessing import get_context
+
+from .stops import ignore_stops
+
+
+def _start(initializer, initargs) -> None:
+    ignore_stops()
+    if initializer is not None:
+        initializer(*initargs)
+
+
+@contextmanager
+def process_pool(workers: int, initializer=None, initargs: tuple = ()):
+    """A ``ProcessPoolExecutor`` of ``workers`` spawned processes, each first running ``initializer(*initargs)``.
+    Leaving the block by an exception (a stop, a failure) cancels what is queued and ends the workers."""
+    pool = ProcessPoolExecutor(workers, mp_context=get_context("spawn"), initializer=_start,
+                               initargs=(initializer, initargs))
+    try:
+        yield pool
+    except BaseException:
+        processes = list((pool._processes or {}).values())  # the executor has no public way to end its workers
+        pool.shutdown(wait=False, cancel_futures=True)
+        for process in processes:
+            process.terminate()
+        for process in processes:
+            process.join()
+        raise
+    pool.shutdown()

@@ -1,0 +1,40 @@
+"""Clean stops of a real process: SIGTERM or SIGINT halfway through a run removes the partial folder, prints one
+line saying what was kept (no traceback), and the process ends by that signal."""
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+
+def start_and_stop(args: list[str], cwd: Path, signum: int, ready) -> tuple[int, str]:
+    """Start ``crowdsim ARGS`` in ``cwd``, wait until ``ready()`` holds (the work is under way), send ``signum``."""
+    p = subprocess.Popen([sys.executable, "-m", "crowdsim.cli", *args], cwd=cwd, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not ready() and time.monotonic() < deadline and p.poll() is None:
+            time.sleep(0.1)
+        assert p.poll() is None, p.stderr.read()
+        time.sleep(1.0)  # into the loop itself
+        p.send_signal(signum)
+        _, err = p.communicate(timeout=60)
+    finally:
+        p.kill()
+    return p.returncode, err
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_a_run_stopped_halfway_leaves_nothing(tmp_path, signum):
+    def partial():
+        return any(".crowdsim-partial-" in p.name for p in tmp_path.iterdir())
+
+    rc, err = start_and_stop(["run", "airport_disembarkation", "--duration", "600", "--quiet", "--out", "run"],
+                             tmp_path, signum, partial)
+    assert rc == -signum
+    name = signal.Signals(signum).name
+    assert err.strip().splitlines() == [f"crowdsim: stopped by {name}; nothing was kept: run was not written"]
+    assert list(tmp_path.iterdir()) == []
