@@ -4,7 +4,9 @@ Each seed is one episode: the scenario (its robot driven to its goals or followi
 named on the command line, the crowd's warm-up, then the frames up to the last goal or the duration. The episode
 is built from the frames as a ``NavEpisode`` (the robot's true pose, every person alive, the walls, the task; for
 following, the follower's track of the target and whether the robot's sensors saw it) and scored by
-``evaluation.navigation.navigation_metrics``, the figures ``crowdsim evaluate-nav`` gives for a run directory. No run
+``evaluation.navigation.navigation_metrics``, the figures ``crowdsim evaluate-nav`` gives for a run directory: the
+numbers ``crowdsim run`` writes (at full precision) and ``read_nav_run`` reads back, in the same order, and the task
+through the same navigation.json spec, so a run of the same seed gets the same figures to the last bit. No run
 directory is written. Seeds S..S+N-1 are the suite, so two planners meet the same crowds; every seed starts over
 from ``Simulation.reset(seed)``, so its figures do not depend on the workers or the order.
 """
@@ -13,22 +15,21 @@ from __future__ import annotations
 
 import json
 import math
-from concurrent.futures import ProcessPoolExecutor
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
 from evaluation.io import EvaluationInputError
-from evaluation.navigation import NavEpisode, PersonRows, navigation_metrics
+from evaluation.navigation import NavEpisode, PersonRows, navigation_metrics, navigation_task
 from evaluation.navigation_report import OUTCOME_COLUMNS, SOCIAL_COLUMNS, json_safe, mean_sd, nav_table
 from scenarios import ScenarioError
 from scenarios.format import PLANNER
-from scenarios.geometry import wall_segments
 from scenarios.schema import validate
 
 from .loop import Simulation
+from .run import navigation_spec
+from .workers import process_pool
 
 # the columns of the table: (label, key, scale, format), as evaluate-nav's
 GOAL_COLUMNS = ("success", "time_to_goal", "path_length", "path_irregularity", "min_distance",
@@ -60,6 +61,8 @@ def episode_metrics(sim: Simulation, seed: int, duration: float) -> dict:
     sim.warm_up()
     stamp, pose, follow = [], [], []
     frame_of, ids, position, velocity, radius = [], [], [], [], []
+    # what crowdsim run writes to robot.csv, persons.csv and following.csv (at full precision: the same numbers),
+    # in the same order
     for frame in sim.frames(duration):
         a = frame.agents
         frame_of.append(np.full(len(a.id), len(stamp)))
@@ -72,16 +75,15 @@ def episode_metrics(sim: Simulation, seed: int, duration: float) -> dict:
         follow.append((frame.target_track, frame.target_visible))
     persons = PersonRows(np.concatenate(frame_of), np.concatenate(ids), np.concatenate(position),
                          np.concatenate(velocity), np.concatenate(radius))
-    robot = sim.scenario["robot"]
-    common = dict(stamp=np.array(stamp), robot_pose=np.array(pose), robot_radius=robot["radius"], persons=persons,
-                  walls=wall_segments(sim.scenario), time_limit=duration)
-    if sim.driver == "goals":
-        ep = NavEpisode(task="goal", goal=np.array(robot["goals"][-1]), goal_radius=robot["goal_radius"], **common)
-    else:
+    # the task as crowdsim run writes it to navigation.json and read_nav_run takes it from there
+    task = navigation_task(navigation_spec({**sim.scenario, "duration": duration}, sim.target_id),
+                           f"{sim.scenario.get('source', sim.scenario['name'])}: the navigation task")
+    following = {}
+    if task["task"] == "follow":
         track, visible = np.array(follow).T
-        ep = NavEpisode(task="follow", target_id=sim.target_id, band=tuple(robot["follow"]["band"]),
-                        target_track=track, target_visible=visible, **common)
-    return navigation_metrics(ep)
+        following = {"target_track": track, "target_visible": visible.astype(bool)}
+    return navigation_metrics(NavEpisode(stamp=np.array(stamp), robot_pose=np.array(pose), persons=persons, **task,
+                                         **following))
 
 
 _worker: dict = {}
@@ -108,8 +110,7 @@ def navigate(scenario: dict, seeds: list[int], duration: float, workers: int = 1
                 runs.append(episode_metrics(sim, seed, duration))
                 bar.update()
             return runs
-        with ProcessPoolExecutor(workers, mp_context=get_context("spawn"), initializer=_start_worker,
-                                 initargs=(scenario, duration)) as pool:
+        with process_pool(workers, _start_worker, (scenario, duration)) as pool:
             runs = []
             for figures in pool.map(_run_seed, seeds):
                 runs.append(figures)

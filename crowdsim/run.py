@@ -8,7 +8,10 @@ chunks (evaluation/score.py), and the top-down picture keeps at most ``PICTURE_S
 A scenario whose robot drives to goals or follows a person (``robot.driver``) also writes what the navigation
 metrics need (docs/navigation-metrics.md): persons.csv, navigation.json and, for following, following.csv, streamed
 like the other CSVs; the run ends at the last goal, and its navigation metrics, scored from those files as
-``crowdsim evaluate-nav`` scores them, join metrics.json.
+``crowdsim evaluate-nav`` scores them, join metrics.json. What the navigation metrics read (robot.csv, persons.csv,
+following.csv) is written at full precision (``EXACT``), so that the figures are those ``crowdsim navigate`` computes
+from the same values in memory: acceleration and jerk are second and third differences, which rounding to a tenth of
+a millimetre and a hundredth of a second would swamp.
 """
 
 from __future__ import annotations
@@ -50,6 +53,9 @@ GROUPS_HEADER = "frame,t,group,id,x,y,age"
 DETECTIONS_HEADER = "frame,t,id,x,y,confidence"  # the fused detections the tracker was given, odom
 # the robot's true pose in the world and its odometry pose in odom (what the pipeline saw), per tracking cycle
 ROBOT_HEADER = "frame,t,x,y,yaw,odom_x,odom_y,odom_yaw"
+# a number in full: Python's str of a float is the shortest decimal that reads back as the very same float64 (1.5008,
+# not 1.5007999999999999), for the files the navigation metrics read, whose derivatives amplify any rounding
+EXACT = "%s"
 # every sensor frame's ground truth: for each person in the sensor's view or seen by it, the laser beams that hit
 # them or the camera's visible share of them (amount), whether in view, and whether in view but unseen (occluded);
 # t is the sensor frame's own time, frame the tracking cycle that delivered it
@@ -73,6 +79,18 @@ def _rows(frame_index: int, stamp: float, persons) -> np.ndarray:
 
 
 INTEGER_COLUMNS = {"id", "in_range", "beams", "visible", "visible_seed000", "target_track", "target_visible", "group"}
+
+
+def csv_format(header: str, real: str = "%.4f", t: str = "%.2f") -> list[str]:
+    """A CSV's column formats: frame and the integer columns whole, t with ``t``, the other columns with ``real``
+    (by default positions to a tenth of a millimetre, times to a hundredth of a second)."""
+    return ["%d", t] + ["%d" if name in INTEGER_COLUMNS else real for name in header.split(",")[2:]]
+
+
+# the files the navigation metrics read (evaluation/navigation.py read_nav_run), every number as it was
+ROBOT_FORMAT = csv_format(ROBOT_HEADER, EXACT, EXACT)
+PERSONS_FORMAT = csv_format(PERSONS_HEADER, EXACT, EXACT)
+FOLLOWING_FORMAT = csv_format(FOLLOWING_HEADER, EXACT, EXACT)
 
 
 def _without_unset(value):
@@ -160,14 +178,14 @@ def _visibility_rows(frame, written: dict[str, float]) -> list[np.ndarray]:
 
 class CsvWriter:
     """A CSV written as its rows come, a block at a time (the bytes are those ``np.savetxt`` of all rows at once
-    would write). ``names``: for a column of indices, the names written in their place. The rows gather in one
-    buffer made once: a long run's small arrays, kept between blocks, would scatter over the heap and grow it."""
+    would write). ``fmt``: the columns' formats, ``csv_format(header)`` by default. ``names``: for a column of
+    indices, the names written in their place. The rows gather in one buffer made once: a long run's small arrays,
+    kept between blocks, would scatter over the heap and grow it."""
 
     def __init__(self, path: Path, header: str, fmt: list[str] | None = None, names: dict[int, list[str]] = None):
         self.file = open(path, "w")
         self.file.write(header + "\n")
-        self.fmt = fmt or ["%d", "%.2f"] + ["%d" if name in INTEGER_COLUMNS else "%.4f"
-                                            for name in header.split(",")[2:]]
+        self.fmt = fmt or csv_format(header)
         self.names = {column: np.array(values, object) for column, values in (names or {}).items()}
         self.buffer = np.empty((BLOCK_ROWS, len(self.fmt)))
         self.rows = 0
@@ -276,13 +294,13 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
            "detections": CsvWriter(tmp / "detections.csv", DETECTIONS_HEADER),
            "relations": CsvWriter(tmp / "relations.csv", RELATIONS_HEADER, RELATIONS_FORMAT),
            "groups": CsvWriter(tmp / "groups.csv", GROUPS_HEADER),
-           "robot": CsvWriter(tmp / "robot.csv", ROBOT_HEADER),
+           "robot": CsvWriter(tmp / "robot.csv", ROBOT_HEADER, ROBOT_FORMAT),
            "visibility": CsvWriter(tmp / "visibility.csv", VISIBILITY_HEADER, VISIBILITY_FORMAT, {3: sensors})}
     navigating = sim.driver in ("goals", "follow")
     if navigating:
-        csv["persons"] = CsvWriter(tmp / "persons.csv", PERSONS_HEADER)
+        csv["persons"] = CsvWriter(tmp / "persons.csv", PERSONS_HEADER, PERSONS_FORMAT)
     if sim.driver == "follow":
-        csv["following"] = CsvWriter(tmp / "following.csv", FOLLOWING_HEADER)
+        csv["following"] = CsvWriter(tmp / "following.csv", FOLLOWING_HEADER, FOLLOWING_FORMAT)
     duration = scenario["duration"]
     picture = Picture(max(1, math.ceil(duration / PICTURE_SECONDS - 1e-9)))
     written: dict[str, float] = {}

@@ -33,7 +33,7 @@ from pipeline.frames import wrap_angle
 
 from .io import EvaluationInputError, _integers, read_table
 
-__all__ = ["NavEpisode", "PersonRows", "navigation_metrics", "read_nav_run"]
+__all__ = ["NavEpisode", "PersonRows", "navigation_metrics", "navigation_task", "read_nav_run"]
 
 DISCOMFORT_GAP = 0.2  # m: CrowdNav's discomfort_dist (Chen et al. 2019; its env.config)
 INTIMATE_GAP, PERSONAL_GAP = 0.45, 1.2  # m: Hall 1966's intimate and personal zones' outer limits, as HuNavSim's
@@ -441,7 +441,7 @@ def _pair(spec: dict, key: str, path: Path) -> np.ndarray:
 
 
 def _navigation_spec(path: Path) -> dict:
-    """navigation.json checked: known keys only, each of the right kind; the task's own keys present."""
+    """navigation.json read and checked (``navigation_task``)."""
     try:
         spec = json.loads(path.read_text())
     except OSError as e:
@@ -449,6 +449,13 @@ def _navigation_spec(path: Path) -> dict:
     except json.JSONDecodeError as e:
         raise EvaluationInputError(f"{path}: not JSON ({e}); expected an object with keys {', '.join(NAV_KEYS)}") \
             from None
+    return navigation_task(spec, path)
+
+
+def navigation_task(spec, path) -> dict:
+    """A task as navigation.json holds it, checked (known keys only, each of the right kind, the task's own keys
+    present; errors name ``path``), as ``NavEpisode``'s task keywords: what ``read_nav_run`` makes of the file, and
+    what ``crowdsim navigate`` makes of the same task in memory, so that both score one episode alike."""
     if not isinstance(spec, dict):
         raise EvaluationInputError(f"{path}: expected a JSON object with keys {', '.join(NAV_KEYS)}")
     unknown = sorted(set(spec) - set(NAV_KEYS))
@@ -487,8 +494,10 @@ def _navigation_spec(path: Path) -> dict:
 
 def read_nav_run(run_dir) -> NavEpisode:
     """The episode of a run directory: robot.csv (world pose), persons.csv, navigation.json and, for a following
-    task, following.csv (layouts in docs/navigation-metrics.md). Bad input raises EvaluationInputError naming the
-    file, the key or column, and what was expected."""
+    task, following.csv (layouts in docs/navigation-metrics.md), the rows in the files' order. Bad input raises
+    EvaluationInputError naming the file, the key or column, and what was expected. ``crowdsim run`` writes the
+    numbers read here at full precision, so its episode is the very one ``crowdsim navigate`` scores in memory
+    (crowdsim/navigate.py ``episode_metrics``), and the figures are equal to the last bit."""
     run_dir = Path(run_dir)
     spec = _navigation_spec(run_dir / "navigation.json")
     path = run_dir / "robot.csv"
