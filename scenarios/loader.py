@@ -255,6 +255,9 @@ def check_driver(scenario: dict, source: str) -> None:
 
 def check_geometry(scenario: dict, source: str) -> None:
     """Cross-key checks: names that must exist, places that must be walkable, limits that must be ordered."""
+    if scenario["duration"] < scenario["dt"]:
+        raise ScenarioError(source, "duration", f"{scenario['duration']:g} s; expected at least one step, dt "
+                                                f"({scenario['dt']:g} s)")
     crowd = scenario["crowd"]
     types = crowd["agent_types"]
     for name, t in types.items():

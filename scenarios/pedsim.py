@@ -95,6 +95,7 @@ DEFAULT_MAX_AGENTS = CROWD.fields["max_agents"].default
 GRID_SPACING = 0.7  # m, between standing persons when a cluster without stages has no area to spread over
 AGENT_TYPES = {0: "adult", 1: "child", 2: "robot", 3: "elder"}  # pedsim_ros's Ped::Tagent::AgentType
 SINK = 2  # libpedsim's Twaypoint::Behavior: SIMPLE 0, SOURCE 1, SINK 2
+MAX_DEPTH = 16  # nested elements (a PedSim file has 3: <scenario>, <agent>, <addwaypoint>)
 
 # the airport scenario's sensors: two SICK LMS500 back to back at 0.70 m (seed 000 Sec. IV-A)
 SENSORS = {"lasers": [{"name": "front_laser", "mount": [0.25, 0.0, 0.0], "height": 0.70},
@@ -151,6 +152,10 @@ def _parse(path: Path) -> _Element:
     roots: list[_Element] = []
 
     def start(tag, attrs):
+        if len(stack) >= MAX_DEPTH:
+            raise ScenarioError(source, f"<{tag}> at line {parser.CurrentLineNumber}",
+                                f"nested more than {MAX_DEPTH} elements deep; expected a PedSim scenario's <scenario> "
+                                "with its elements and their <addwaypoint> children")
         el = _Element(tag, dict(attrs), parser.CurrentLineNumber)
         (stack[-1].children if stack else roots).append(el)
         stack.append(el)
