@@ -97,16 +97,17 @@ def _cmd_evaluate(args) -> int:
             raise EvaluationInputError("--motchallenge exports one pair of files: give --gt and --tracks")
         runs = [score_tracking(files(Path(d) / "groundtruth.csv", Path(d) / "tracks.csv"), args.threshold)
                 for d in args.runs]
+        # every file scored before anything is printed: a bad one is the one line printed
+        with_groups = [Path(d) for d in args.runs if all((Path(d) / f).is_file() for f in GROUP_FILES)]
+        groups = [group_scores(*(d / f for f in ("groundtruth.csv", "tracks.csv", *GROUP_FILES)))
+                  for d in with_groups]
         print(f"{len(runs)} runs at {args.threshold:g} m, mean and sample standard deviation")
         print(seeds_table(runs, SEED000_COLUMNS))
         print()
         print(seeds_table(runs, SEED001_COLUMNS))
         mean, sd = mean_sd(runs)
         report = {"runs": runs, "mean": mean, "sd": sd}
-        with_groups = [Path(d) for d in args.runs if all((Path(d) / f).is_file() for f in GROUP_FILES)]
         if with_groups:
-            groups = [group_scores(*(d / f for f in ("groundtruth.csv", "tracks.csv", *GROUP_FILES)))
-                      for d in with_groups]
             print(f"\ngroups of the {len(groups)} runs with {' and '.join(GROUP_FILES)}, one row each")
             for d, g in zip(with_groups, groups):
                 print(f"{d}:\n{groups_table(g)}")
@@ -116,12 +117,13 @@ def _cmd_evaluate(args) -> int:
         return 0
     pair = files(args.gt, args.tracks)
     tracking = score_tracking(pair, args.threshold)
+    report = {"tracking": tracking}
+    if args.relations:  # scored before anything is printed: a bad group file is the one line printed
+        report["groups"] = group_scores(args.gt, args.tracks, args.relations, args.groups)
     print(tracking_table(tracking))
     print(f"{tracking['frames']} frames; {pair.gt_ignored} ground-truth rows ignored (occluded or out of range); "
           f"threshold {args.threshold:g} m")
-    report = {"tracking": tracking}
     if args.relations:
-        report["groups"] = group_scores(args.gt, args.tracks, args.relations, args.groups)
         print()
         print(groups_table(report["groups"]))
     if args.json:
@@ -544,8 +546,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_run)
     p = sub.add_parser("evaluate", help="score any tracker's output (the CSV layout `crowdsim run` writes) against "
                                         "ground truth")
-    p.add_argument("--gt", help="ground truth CSV (header with frame,id,x,y; optional t, visible, in_range, range, "
-                                "...)")
+    p.add_argument("--gt", help="ground truth CSV (header with frame,id,x,y and visible unless --no-occlusion; "
+                                "optional t, in_range, range, ...)")
     p.add_argument("--tracks", help="tracks CSV (header with frame,id,x,y; other columns allowed)")
     p.add_argument("--runs", nargs="+", metavar="DIR",
                    help="instead of --gt and --tracks: run directories (the same scenario at several seeds, say), "
@@ -555,7 +557,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-range", type=float, help="ignore ground truth farther than this from the robot (m; "
                                                   "seed 000's real data: 12) -- needs a range column")
     p.add_argument("--no-occlusion", action="store_true",
-                   help="count occluded persons as misses (by default a visible column turns ignoring them on)")
+                   help="count occluded persons as misses (by default the ground truth's visible column, which it "
+                        "must then have, ignores them)")
     p.add_argument("--visible-column", default="visible",
                    help="the ground truth's visibility column: visible (any laser beam hit them, default) or "
                         "visible_seed000 (seed 000's rule: a laser point within 0.3 m of the position moved 0.2 m "

@@ -14,7 +14,7 @@ import numpy as np
 
 from .clearmot import ClearMot, score_frames
 from .groups import GroupFrame, GroupMetrics
-from .io import EvaluationInputError, _ignore, table_chunks
+from .io import REQUIRED, EvaluationInputError, Ignored, table_chunks
 from .score import pct
 from .sequence import Sequence
 
@@ -22,10 +22,11 @@ RELATIONS_COLUMNS = ("frame", "track_a", "track_b", "strength")
 GROUPS_COLUMNS = ("frame", "group", "id")
 
 
-def frame_rows(path, required: tuple[str, ...]):
-    """(frame, columns) of each frame of a CSV sorted by frame, in order, a chunk of rows at a time."""
+def frame_rows(path, required: tuple[str, ...], read: tuple[str, ...] = ()):
+    """(frame, columns) of each frame of a CSV sorted by frame, in order, a chunk of rows at a time (``required``
+    and ``read`` as ``table_chunks`` checks them)."""
     held = None
-    for table in table_chunks(path, required):
+    for table in table_chunks(path, required, read):
         if held is not None:
             table = {name: np.concatenate([held[name], table[name]]) for name in table}
         frame = table["frame"]
@@ -61,17 +62,18 @@ def _ints(rows, name) -> np.ndarray:
 
 
 def score_groups(gt_path, tracks_path, relations_path, groups_path, threshold: float = 1.0,
-                 occlusion: bool = True, visible_column: str = "visible", max_range: float | None = None) -> dict:
-    """The group metrics of a run's four files (evaluation/groups.py ``GroupMetrics.summary``)."""
-    streams = (frame_rows(gt_path, ("frame", "id", "x", "y", "group")),
-               frame_rows(tracks_path, ("frame", "id", "x", "y")), frame_rows(relations_path, RELATIONS_COLUMNS),
-               frame_rows(groups_path, GROUPS_COLUMNS))
+                 occlusion: bool = True, visible_column: str | None = None, max_range: float | None = None) -> dict:
+    """The group metrics of a run's four files (evaluation/groups.py ``GroupMetrics.summary``); the ground truth's
+    ignored rows as ``io.Ignored`` says."""
+    ignored = Ignored(occlusion, visible_column, max_range)
+    streams = (frame_rows(gt_path, (*REQUIRED, "group"), ignored.columns), frame_rows(tracks_path, REQUIRED),
+               frame_rows(relations_path, RELATIONS_COLUMNS), frame_rows(groups_path, GROUPS_COLUMNS))
     cm, metrics = ClearMot(threshold), GroupMetrics()
     for frame, (gt, tracks, relations, groups) in merged(*streams):
         gt_ids, track_ids = _ints(gt, "id"), _ints(tracks, "id")
         gt_xy = np.zeros((0, 2)) if gt is None else np.column_stack([gt["x"], gt["y"]])
         track_xy = np.zeros((0, 2)) if tracks is None else np.column_stack([tracks["x"], tracks["y"]])
-        ignore = np.zeros(0, bool) if gt is None else _ignore(gt, gt_path, occlusion, visible_column, max_range)
+        ignore = np.zeros(0, bool) if gt is None else ignored(gt, gt_path)
         result = None
         if len(gt_ids) or len(track_ids):
             seq_gt = Sequence.from_rows(np.full(len(gt_ids), frame), gt_ids, gt_xy, ignore=ignore)

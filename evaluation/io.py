@@ -1,30 +1,44 @@
 """Reading ground truth and tracks from the CSV layout ``crowdsim run`` writes, in chunks of whole frames, and
 MOTChallenge-style export.
 
-A CSV has a header row naming its columns; ``frame``, ``id``, ``x`` and ``y`` are required, ``t`` is read when
-there, any other column is allowed. Rows are sorted by frame (any order within a frame), as a run writes them and as
-MOTChallenge files are: that is what lets a run of any length be read a chunk at a time, in constant memory. A
-ground-truth file may add ``visible`` (1 where the person was not physically occluded: its rows with 0 are ignored,
-unless occlusion handling is off), ``in_range`` (0: beyond the run's evaluation range, ignored) and ``range``
-(metres from the robot, for another range limit).
+A CSV is UTF-8 text (a leading byte order mark, as Excel writes one, is skipped) with a header row naming its
+columns; ``frame``, ``id``, ``x`` and ``y`` are required, ``t`` is read when there, any other column is allowed.
+Rows are sorted by frame (any order within a frame), as a run writes them and as MOTChallenge files are: that is
+what lets a run of any length be read a chunk at a time, in constant memory. A ground-truth file may add
+``visible`` (1 where the person was not physically occluded: its rows with 0 are ignored, unless occlusion handling
+is off; ``crowdsim evaluate`` requires it while occlusion handling is on, see ``Ignored``), ``in_range`` (0: beyond
+the run's evaluation range, ignored) and ``range`` (metres from the robot, for another range limit).
+
+Strict on purpose: every column a reader uses must hold finite numbers, and ids, frame numbers and group numbers
+(``WHOLE``) whole numbers a float64 holds exactly (|n| < 2^53), so that no NaN, inf or wrapped id is scored as if
+it were data. Anything else is one EvaluationInputError naming the file, the line, the column and what was expected.
 """
 
 from __future__ import annotations
 
 import itertools
 import os
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
+
+from scenarios.errors import Error
 
 from .sequence import Sequence
 
 REQUIRED = ("frame", "id", "x", "y")
 CHUNK_ROWS = 1 << 14  # rows parsed at once (about 170 frames of the airport): a few MB, whatever the file's length
+# columns of ids and counts, whatever the file: whole numbers below 2^53 in size. Every value is parsed as a float64,
+# which from 2^53 on rounds them (2^53 + 1 reads as 2^53, so two ids would merge silently); 1e20 would wrap to
+# INT64_MIN.
+WHOLE = frozenset({"frame", "id", "group", "track_a", "track_b", "target_track", "target_visible"})
+EXACT = 2.0 ** 53
 
 
-class EvaluationInputError(ValueError):
-    pass
+class EvaluationInputError(Error):
+    """Input the evaluation cannot score (a file, a column, a value): ``crowdsim.Error``, so the command line prints
+    it as its one error line."""
 
 
 def _header(path: Path, f, required: tuple[str, ...]) -> list[str]:
@@ -34,69 +48,171 @@ def _header(path: Path, f, required: tuple[str, ...]) -> list[str]:
     if missing:
         raise EvaluationInputError(f"{path}: header {header!r} lacks column(s) {', '.join(missing)}; expected a "
                                    f"header row with at least {', '.join(required)}")
+    twice = sorted({c for c in names if names.count(c) > 1})
+    if twice:
+        raise EvaluationInputError(f"{path}: header {header!r} names column(s) {', '.join(twice)} twice; expected "
+                                   f"each column once")
     return names
 
 
-def table_chunks(path, required: tuple[str, ...] = REQUIRED, chunk_rows: int = CHUNK_ROWS):
-    """The columns of a CSV with a header row, as float arrays by name, ``chunk_rows`` rows at a time (blank lines
-    skipped). The header is checked before the first chunk; a file without rows gives one empty chunk."""
-    path = Path(path)
+def _rows(lines: list[str]) -> list[str]:
+    """The lines that are rows: not blank, not # comment lines. loadtxt is given these only, so that its k-th row
+    is the k-th of them (it would skip a comment line, not a blank one)."""
+    return [text for text in lines if text.strip() and text[0] != "#"]
+
+
+def _number(field: str) -> bool:
+    """Whether loadtxt reads ``field`` as a number (Python's float also takes 1_000; loadtxt does not)."""
     try:
-        with open(path) as f:
-            names = _header(path, f, required)
-            first = True
-            while True:
-                raw = list(itertools.islice(f, chunk_rows))
-                if not raw and not first:
-                    return
-                first = False
-                lines = [line for line in raw if line.strip()]
-                try:
-                    data = np.loadtxt(lines, delimiter=",", ndmin=2) if lines else np.zeros((0, len(names)))
-                except ValueError as e:
-                    raise EvaluationInputError(f"{path}: {e}; expected {len(names)} numbers per row") from None
-                if data.shape[1] != len(names):
-                    raise EvaluationInputError(f"{path}: rows have {data.shape[1]} values; expected {len(names)} "
-                                               f"numbers per row, one per column the header names")
-                yield {name: data[:, k] for k, name in enumerate(names)}
+        float(field)
+    except ValueError:
+        return False
+    return "_" not in field
+
+
+class _Chunk:
+    """The raw lines of a chunk, to say where a bad value is: ``rows`` those given to loadtxt, ``start`` the file
+    line of the first raw line."""
+
+    def __init__(self, path: Path, names: list[str], raw: list[str], start: int):
+        self.path, self.names, self.raw, self.start = path, names, raw, start
+        self.rows = _rows(raw)
+
+    def line(self, row: int) -> int:
+        """The file line of data row ``row``."""
+        return self.start + [k for k, text in enumerate(self.raw) if _rows([text])][row]
+
+    def malformed(self, error: str) -> EvaluationInputError:
+        """The first row that is not one number per column (loadtxt failed, with ``error``, or got another width)."""
+        for k, text in enumerate(self.raw):
+            if not _rows([text]):
+                continue
+            fields = text.partition("#")[0].split(",")
+            where = f"{self.path}: line {self.start + k}"
+            if len(fields) != len(self.names):
+                return EvaluationInputError(f"{where} has {len(fields)} values; expected {len(self.names)} numbers "
+                                            f"per row, one per column the header names")
+            for name, field in zip(self.names, fields):
+                if not _number(field):
+                    return EvaluationInputError(f"{where}, column {name}: {field.strip()!r} is not a number; "
+                                                f"expected {len(self.names)} numbers per row")
+        return EvaluationInputError(f"{self.path}: {error}; expected {len(self.names)} numbers per row")
+
+    def check(self, data: np.ndarray, columns: list[int]) -> None:
+        """The ``columns`` (indices) of ``data`` hold finite numbers, whole and exact ones where ``WHOLE``."""
+        for k in columns:
+            values, whole = data[:, k], self.names[k] in WHOLE
+            ok = (np.abs(values) < EXACT) & (values == np.round(values)) if whole else np.isfinite(values)
+            if ok.all():
+                continue
+            row = int(np.flatnonzero(~ok)[0])
+            field = self.rows[row].partition("#")[0].split(",")[k].strip()
+            kind = "whole numbers (below 2^53 in size)" if whole else "finite numbers"
+            raise EvaluationInputError(f"{self.path}: line {self.line(row)}, column {self.names[k]} must hold "
+                                       f"{kind}, got {field!r}")
+
+
+def _not_utf8(path: Path) -> EvaluationInputError:
+    """The first line of ``path`` that is not UTF-8, named (the text reader's error says only a byte offset)."""
+    with open(path, "rb") as f:
+        for n, line in enumerate(f, 1):
+            try:
+                line.decode("utf-8")
+            except UnicodeDecodeError as e:
+                return EvaluationInputError(f"{path}: line {n} is not UTF-8 text (byte 0x{line[e.start]:02x}, "
+                                            f"{e.start + 1} bytes into the line); expected a file saved as UTF-8")
+    return EvaluationInputError(f"{path}: not UTF-8 text; expected a file saved as UTF-8")
+
+
+@contextmanager
+def _reading(path: Path):
+    """Reading ``path`` as text: a file that cannot be read, or is not UTF-8, is one EvaluationInputError."""
+    try:
+        yield
+    except UnicodeDecodeError:
+        raise _not_utf8(path) from None
     except OSError as e:
         raise EvaluationInputError(f"{path}: cannot be read ({e.strerror})") from None
 
 
+def read_text(path) -> str:
+    """A small text file (navigation.json, say) read as the CSVs are: UTF-8, a leading byte order mark skipped."""
+    path = Path(path)
+    with _reading(path):
+        return path.read_text(encoding="utf-8-sig")
+
+
+def table_chunks(path, required: tuple[str, ...] = REQUIRED, read: tuple[str, ...] = (),
+                 chunk_rows: int = CHUNK_ROWS):
+    """The columns of a CSV with a header row, as float arrays by name, ``chunk_rows`` rows at a time (blank lines
+    and # comment lines skipped). The header is checked before the first chunk; a file without rows gives one empty
+    chunk. The ``required`` columns and those of ``read`` the file has (what the caller uses) are checked in every
+    chunk as the module docstring says; other columns need only be numbers."""
+    path = Path(path)
+    with _reading(path), open(path, encoding="utf-8-sig") as f:
+        names = _header(path, f, required)
+        checked = [k for k, name in enumerate(names) if name in required or name in read]
+        start, first = 2, True
+        while True:
+            raw = list(itertools.islice(f, chunk_rows))
+            if not raw and not first:
+                return
+            first = False
+            chunk = _Chunk(path, names, raw, start)
+            start += len(raw)
+            try:
+                data = np.loadtxt(chunk.rows, delimiter=",", ndmin=2) if chunk.rows \
+                    else np.zeros((0, len(names)))
+            except ValueError as e:
+                raise chunk.malformed(str(e)) from None
+            if data.shape[1] != len(names):
+                raise chunk.malformed(f"rows have {data.shape[1]} values")
+            chunk.check(data, checked)
+            yield {name: data[:, k] for k, name in enumerate(names)}
+
+
 def read_table(path, required: tuple[str, ...] = REQUIRED) -> dict[str, np.ndarray]:
-    """The whole CSV's columns as float arrays by name (for the small files of a run, robot.csv say)."""
+    """The whole CSV's columns as float arrays by name (for the small files of a run, robot.csv say), the
+    ``required`` ones checked."""
     chunks = list(table_chunks(path, required))
     return {name: np.concatenate([c[name] for c in chunks]) for name in chunks[0]}
 
 
-def _integers(table: dict, column: str, path) -> np.ndarray:
-    values = table[column]
-    if not np.all(np.isfinite(values)) or np.any(values != np.round(values)):
-        raise EvaluationInputError(f"{path}: column {column} must hold whole numbers")
-    return values.astype(np.int64)
+class Ignored:
+    """Which ground-truth rows the evaluation ignores (called on a chunk's columns): ``visible_column`` 0 with
+    ``occlusion``, ``in_range`` 0, and with ``max_range`` a ``range`` beyond it; ``columns``: those it reads.
+    ``visible_column`` None takes ``visible`` where the file has one (a run's own files, library callers); a name
+    (crowdsim evaluate's ``--visible-column``, ``visible`` by default) must be there, so that a ground truth
+    without it, or a tracks file given as one, is refused rather than scored as all visible."""
 
+    def __init__(self, occlusion: bool = True, visible_column: str | None = None, max_range: float | None = None):
+        self.visible = (visible_column or "visible") if occlusion else None
+        self.required = occlusion and visible_column is not None
+        self.max_range = max_range
+        self.columns = tuple(c for c in (self.visible, "in_range", None if max_range is None else "range") if c)
 
-def _ignore(table: dict, path, occlusion: bool, visible_column: str, max_range: float | None) -> np.ndarray:
-    """Rows the evaluation ignores: ``visible_column`` 0 (when the file has that column and ``occlusion``),
-    ``in_range`` 0, and with ``max_range`` a ``range`` beyond it."""
-    ignore = np.zeros(len(table["frame"]), bool)
-    if occlusion and visible_column in table:
-        ignore |= table[visible_column] == 0
-    elif occlusion and visible_column != "visible":
-        raise EvaluationInputError(f"{path}: no column {visible_column!r} to take the visibility from")
-    if "in_range" in table:
-        ignore |= table["in_range"] == 0
-    if max_range is not None:
-        if "range" not in table:
-            raise EvaluationInputError(f"{path}: --max-range needs a column 'range' (metres from the robot)")
-        ignore |= table["range"] > max_range
-    return ignore
+    def __call__(self, table: dict, path) -> np.ndarray:
+        ignore = np.zeros(len(table["frame"]), bool)
+        if self.max_range is not None:
+            if "range" not in table:
+                raise EvaluationInputError(f"{path}: --max-range needs a column 'range' (metres from the robot)")
+            ignore |= table["range"] > self.max_range
+        if self.visible in table:
+            ignore |= table[self.visible] == 0
+        elif self.required:
+            raise EvaluationInputError(
+                f"{path}: no column {self.visible!r} to tell occluded persons (0) from visible ones; expected a "
+                f"ground truth as `crowdsim run` writes it (a tracks file has none), or --no-occlusion to score "
+                f"every row as visible, or --visible-column NAME for another column")
+        if "in_range" in table:
+            ignore |= table["in_range"] == 0
+        return ignore
 
 
 def _sequence(rows: dict, path) -> Sequence:
     """Rows of whole frames as a Sequence sorted by frame and id; ids must be unique within a frame."""
-    seq = Sequence.from_rows(rows["frame"], _integers(rows, "id", path), np.column_stack([rows["x"], rows["y"]]),
-                             rows.get("t"), rows["ignore"])
+    seq = Sequence.from_rows(rows["frame"], rows["id"], np.column_stack([rows["x"], rows["y"]]), rows.get("t"),
+                             rows["ignore"])
     dup = (np.diff(seq.frame) == 0) & (np.diff(seq.id) == 0) if len(seq) > 1 else np.zeros(0, bool)
     if dup.any():
         k = int(np.flatnonzero(dup)[0])
@@ -105,14 +221,15 @@ def _sequence(rows: dict, path) -> Sequence:
     return seq
 
 
-def sequence_chunks(path, occlusion: bool = True, visible_column: str = "visible", max_range: float | None = None,
-                    chunk_rows: int = CHUNK_ROWS):
+def sequence_chunks(path, occlusion: bool = True, visible_column: str | None = None,
+                    max_range: float | None = None, chunk_rows: int = CHUNK_ROWS):
     """A ground-truth or track file as Sequences of whole frames, in frame order: the rows of the frame a chunk
-    ends in are held back and joined to the next chunk's. Ignored rows as ``_ignore`` says."""
+    ends in are held back and joined to the next chunk's. Ignored rows as ``Ignored`` says."""
+    ignored = Ignored(occlusion, visible_column, max_range)
     held = None
-    for table in table_chunks(path, chunk_rows=chunk_rows):
-        rows = {"frame": _integers(table, "frame", path), "id": table["id"], "x": table["x"], "y": table["y"],
-                "ignore": _ignore(table, path, occlusion, visible_column, max_range)}
+    for table in table_chunks(path, read=("t", *ignored.columns), chunk_rows=chunk_rows):
+        rows = {"frame": table["frame"].astype(np.int64), "id": table["id"].astype(np.int64), "x": table["x"], "y": table["y"],
+                "ignore": ignored(table, path)}
         if "t" in table:
             rows["t"] = table["t"]
         if held is not None:
@@ -131,7 +248,7 @@ def sequence_chunks(path, occlusion: bool = True, visible_column: str = "visible
         yield _sequence(held, path)
 
 
-def load_sequence(path, occlusion: bool = True, visible_column: str = "visible",
+def load_sequence(path, occlusion: bool = True, visible_column: str | None = None,
                   max_range: float | None = None) -> Sequence:
     """A whole ground-truth or track file as one Sequence (see ``sequence_chunks``)."""
     return Sequence.join(list(sequence_chunks(path, occlusion, visible_column, max_range)))

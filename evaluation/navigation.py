@@ -31,7 +31,7 @@ import numpy as np
 
 from pipeline.frames import wrap_angle
 
-from .io import EvaluationInputError, _integers, read_table
+from .io import EvaluationInputError, read_table, read_text
 
 __all__ = ["NavEpisode", "PersonRows", "navigation_metrics", "navigation_task", "read_nav_run"]
 
@@ -416,12 +416,6 @@ FOLLOWING_COLUMNS = ("frame", "t", "target_track", "target_visible")
 NAV_KEYS = ("task", "goal", "goal_radius", "robot_radius", "time_limit", "walls", "target_id", "band")
 
 
-def _finite(table: dict, columns, path: Path) -> None:
-    for column in columns:
-        if not np.all(np.isfinite(table[column])):
-            raise EvaluationInputError(f"{path}: column {column} must hold finite numbers")
-
-
 def _positive(spec: dict, key: str, path: Path) -> float:
     value = spec.get(key)
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value) or value <= 0:
@@ -443,9 +437,7 @@ def _pair(spec: dict, key: str, path: Path) -> np.ndarray:
 def _navigation_spec(path: Path) -> dict:
     """navigation.json read and checked (``navigation_task``)."""
     try:
-        spec = json.loads(path.read_text())
-    except OSError as e:
-        raise EvaluationInputError(f"{path}: cannot be read ({e.strerror})") from None
+        spec = json.loads(read_text(path))  # UTF-8 (a byte order mark skipped), or one error naming the line
     except json.JSONDecodeError as e:
         raise EvaluationInputError(f"{path}: not JSON ({e}); expected an object with keys {', '.join(NAV_KEYS)}") \
             from None
@@ -502,13 +494,12 @@ def read_nav_run(run_dir) -> NavEpisode:
     spec = _navigation_spec(run_dir / "navigation.json")
     path = run_dir / "robot.csv"
     robot = read_table(path, ROBOT_COLUMNS)
-    _finite(robot, ROBOT_COLUMNS, path)
-    frames = _integers(robot, "frame", path)
+    frames = robot["frame"].astype(np.int64)
     if not len(frames) or (np.diff(frames) <= 0).any() or (np.diff(robot["t"]) <= 0).any():
         raise EvaluationInputError(f"{path}: expected at least one row, frame and t strictly increasing")
 
     def frame_index(table: dict, path: Path) -> np.ndarray:
-        f = _integers(table, "frame", path)
+        f = table["frame"].astype(np.int64)
         k = np.minimum(np.searchsorted(frames, f), len(frames) - 1)
         bad = np.flatnonzero(frames[k] != f)
         if bad.size:
@@ -518,10 +509,9 @@ def read_nav_run(run_dir) -> NavEpisode:
 
     path = run_dir / "persons.csv"
     people = read_table(path, PERSON_COLUMNS)
-    _finite(people, PERSON_COLUMNS, path)
     if (people["radius"] <= 0).any():
         raise EvaluationInputError(f"{path}: column radius must hold numbers above 0 (m)")
-    persons = PersonRows(frame_index(people, path), _integers(people, "id", path),
+    persons = PersonRows(frame_index(people, path), people["id"].astype(np.int64),
                          np.column_stack([people["x"], people["y"]]), np.column_stack([people["vx"], people["vy"]]),
                          people["radius"])
     if len(np.unique(np.column_stack([persons.frame, persons.id]), axis=0)) != len(persons.frame):
@@ -530,13 +520,13 @@ def read_nav_run(run_dir) -> NavEpisode:
     if spec["task"] == "follow":
         path = run_dir / "following.csv"
         table = read_table(path, FOLLOWING_COLUMNS)
-        if not np.array_equal(_integers(table, "frame", path), frames):
+        if not np.array_equal(table["frame"].astype(np.int64), frames):
             raise EvaluationInputError(f"{path}: column frame differs from robot.csv's; expected one row per "
                                        f"robot.csv frame, in the same order")
-        visible = _integers(table, "target_visible", path)
+        visible = table["target_visible"].astype(np.int64)
         if not np.isin(visible, (0, 1)).all():
             raise EvaluationInputError(f"{path}: column target_visible must hold 0 or 1")
-        following = {"target_track": _integers(table, "target_track", path),
+        following = {"target_track": table["target_track"].astype(np.int64),
                      "target_visible": visible.astype(bool)}
     return NavEpisode(stamp=robot["t"], robot_pose=np.column_stack([robot["x"], robot["y"], robot["yaw"]]),
                       persons=persons, **spec, **following)

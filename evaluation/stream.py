@@ -52,7 +52,7 @@ class CsvPair:
     each iteration. After an iteration, ``gt_rows``, ``gt_ignored`` and ``first_frame`` (of either file; None when
     both are empty) describe what was read."""
 
-    def __init__(self, gt_path, tracks_path, occlusion: bool = True, visible_column: str = "visible",
+    def __init__(self, gt_path, tracks_path, occlusion: bool = True, visible_column: str | None = None,
                  max_range: float | None = None, chunk_rows: int = CHUNK_ROWS):
         self.gt_path, self.tracks_path = gt_path, tracks_path
         self.options = {"occlusion": occlusion, "visible_column": visible_column, "max_range": max_range}

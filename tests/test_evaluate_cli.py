@@ -73,7 +73,7 @@ def test_motchallenge_export(tmp_path, capsys):
 @pytest.mark.parametrize("content, expect", [
     ("frame,id,x\n0,1,2\n", "lacks column(s) y"),
     ("frame,id,x,y\n0,1,2\n", "expected 4 numbers per row"),
-    ("frame,id,x,y\n0,1,2,3\n0,1,4,5\n", "id 1 appears twice in frame 0"),
+    ("frame,id,x,y,visible\n0,1,2,3,1\n0,1,4,5,1\n", "id 1 appears twice in frame 0"),
     ("frame,id,x,y\n0.5,1,2,3\n", "column frame must hold whole numbers"),
 ])
 def test_bad_ground_truth_gets_one_clear_error(tmp_path, capsys, content, expect):

@@ -69,7 +69,7 @@ def test_relations_without_groups_is_one_clear_error(tiny_run, capsys):
 
 def test_a_ground_truth_without_groups_is_named(tiny_run, tmp_path, capsys):
     gt = tmp_path / "gt.csv"
-    gt.write_text("frame,t,id,x,y\n0,0,1,0,0\n")
+    gt.write_text("frame,t,id,x,y,visible\n0,0,1,0,0,1\n")
     assert main(["evaluate", "--gt", str(gt), "--tracks", str(tiny_run / "tracks.csv"), "--relations",
                  str(tiny_run / "relations.csv"), "--groups", str(tiny_run / "groups.csv")]) == 2
     line = one_error_line(capsys.readouterr().err)

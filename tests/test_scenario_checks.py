@@ -124,3 +124,12 @@ def test_the_first_sentence_keeps_abbreviations_whole():
     assert first_sentence("Seed 001's room (Mekonnen et al. 2013, Fig. 11) is\nsmall. The robot stands.") == \
         "Seed 001's room (Mekonnen et al. 2013, Fig. 11) is small."
     assert first_sentence("No full stop") == "No full stop."
+
+
+def test_a_duration_shorter_than_a_step_and_deep_pedsim_xml_are_refused(tmp_path):
+    expect(tmp_path, "base: passers_by\nduration: 1.0e-9\n", "duration", "expected at least one step, dt (0.04 s)")
+    path = tmp_path / "deep.xml"
+    path.write_text("<scenario>" + "<welcome>" * 20000 + "</welcome>" * 20000 + "</scenario>\n")
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(str(path))
+    assert info.value.source == str(path) and "nested more than 16 elements deep" in info.value.message
