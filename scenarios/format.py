@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 
+from .costs import laser_beams
 from .laser_presets import LASER_PRESETS
 from .schema import Field, ListOf, MapOf, Schema, Typed
 
@@ -33,10 +34,10 @@ def _extent(key: str):
 
 
 def _two_beams(p: dict):
-    """The laser's beams as sensors/laser.py counts them: a full circle has no last beam."""
-    beams = round(p["fov_deg"] / p["resolution_deg"]) + (0 if p["fov_deg"] >= 360.0 else 1)
+    """The laser's beams as sensors/laser.py counts them (scenarios.costs.laser_beams)."""
+    beams = laser_beams(p)
     if beams < 2:
-        return "resolution_deg", (f"{p['resolution_deg']:g} deg over fov_deg {p['fov_deg']:g} gives {beams} beam; "
+        return "resolution_deg", (f"{p['resolution_deg']:g} deg over fov_deg {p['fov_deg']:g} gives {beams:.0f} beam; "
                                   "expected at least 2 beams (a finer resolution or a wider field of view)")
 
 

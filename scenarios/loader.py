@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from .costs import check_costs
 from .format import DETECTOR_READS, SCENARIO
 from .geometry import closest_on_segments, inside_polygon, wall_segments
 from .pedsim import pedsim_to_scenario
@@ -158,9 +159,11 @@ def load_scenario(name_or_path: str, allow_large: bool = False, **overrides) -> 
 
 
 def scenario_from_dict(raw: dict, source: str = "<scenario>", allow_large: bool = False) -> dict:
-    """Validate scenario data given as a dict (as a YAML file would hold it); ``source`` names it in errors."""
+    """Validate scenario data given as a dict (as a YAML file would hold it); ``source`` names it in errors. What the
+    scenario costs is checked too (scenarios/costs.py), unless ``allow_large``."""
     scenario = validate(raw, SCENARIO, source)
     check_geometry(scenario, source)
+    check_costs(scenario, source, allow_large)
     scenario["source"] = source
     return scenario
 

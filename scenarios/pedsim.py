@@ -68,6 +68,7 @@ from xml.parsers import expat
 
 import numpy as np
 
+from .costs import MAX_AGENTS
 from .format import CROWD, DEFAULT_AGENT_TYPES, ROBOT
 from .geometry import closest_on_segments
 from .schema import ScenarioError
@@ -394,6 +395,8 @@ class _Converter:
     def standing(self, g: _Group, agent_type: str) -> list[dict]:
         """Persons of a cluster without stages: on a grid over its area (a group of n when it has none)."""
         el, n = g.element, g.count
+        if n > MAX_AGENTS:  # each becomes an entry of its own: refused before they are made
+            raise self.error(el, f"n={n:,} standing persons; expected at most {MAX_AGENTS:,} (scenarios/costs.py)")
         w, h = g.spread
         if w == 0 and h == 0 and n <= 12:
             pos = self.fix(el, "standing group", g.position)

@@ -25,7 +25,8 @@ ROBOT_HEAD_HALF = (0.14, 0.2)  # m, half depth and half width of the head
 ROBOT_HEIGHT = 1.7  # m, top of the head
 PARKED_Z = -50.0
 # person slots the model starts with; it is made anew with twice as many when more persons are alive (up to the
-# crowd's max_agents): MuJoCo's ray casts loop over every geom, so 400 parked slots cost an airport scan about 0.6 ms
+# crowd's max_agents, or as many as are alive): MuJoCo's ray casts loop over every geom, so 400 parked slots cost an
+# airport scan about 0.6 ms. Memory and the model's making follow the persons present, not max_agents
 INITIAL_CAPACITY = 32
 PARTS = ("torso", "head", "legs")
 # MuJoCo geom groups, so that a ray cast skips the parts a ray at its height cannot meet (a renderer must turn all
@@ -191,10 +192,10 @@ class Scene:
         (``body.body_scale``; the adult body without it).
         """
         n = len(person_ids)
-        if n > self.max_capacity:
-            raise ValueError(f"{n} persons alive but the scene holds {self.max_capacity} (crowd.max_agents)")
         if n > self.capacity:  # a bigger model; each slot of it costs every ray cast a little, parked or not
-            self._build(min(self.max_capacity, max(2 * self.capacity, n)))
+            # doubling up to max_capacity, and never fewer than alive: the follow driver's target joins even a
+            # crowd that its sources have filled to crowd.max_agents
+            self._build(max(n, min(self.max_capacity, 2 * self.capacity)))
         m, d = self.model, self.data
         d.mocap_pos[self.robot_mocap] = (robot_pose[0], robot_pose[1], 0.0)
         d.mocap_quat[self.robot_mocap] = (np.cos(robot_pose[2] / 2), 0.0, 0.0, np.sin(robot_pose[2] / 2))

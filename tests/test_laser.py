@@ -266,10 +266,12 @@ def test_never_synced_slots_are_parked():
     np.testing.assert_array_equal(scan.person_id, np.where(which == 0, 1, -1))
 
 
-def test_sync_rejects_more_persons_than_capacity():
+def test_sync_grows_past_capacity_when_more_persons_are_alive():
+    # the capacity (crowd.max_agents) bounds the doubling, not the persons: the follow driver's target joins even a
+    # crowd its sources filled (scenarios/costs.py refuses more persons at the start than max_agents)
     scene = Scene(np.array([FRONT_WALL], float), 0.425, 2)
-    with pytest.raises(ValueError, match="holds 2"):
-        scene.sync(np.zeros(3), np.arange(3), np.zeros((3, 2)))
+    scene.sync(np.zeros(3), np.arange(3), np.array([[1.0, 1.0], [2.0, 1.0], [3.0, 1.0]]))
+    assert (scene.capacity, scene.alive) == (3, 3)
 
 
 def test_one_batched_call_for_all_lasers_gives_the_scans_of_one_call_each():

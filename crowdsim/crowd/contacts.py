@@ -19,6 +19,11 @@ ITERATIONS = 40  # Chipmunk solver iterations per substep
 COLLISION_SLOP = 0.002  # m of overlap Chipmunk tolerates before it pushes back
 CORRECTION_PER_STEP = 0.5  # share of an overlap Chipmunk removes per 0.04 s (its default: about 0.2)
 HASH_CELL = 1.0  # m, two body diameters: Chipmunk steps about 15% faster than with 0.5 m at 5000 agents
+# bodies the spatial hash is sized for when made: its table has four cells per body of the crowd's capacity, up to
+# this many; a larger capacity (crowd.max_agents) gets its table grown, doubling, as bodies come. Chipmunk clears the
+# whole table every step, so a table sized for max_agents 1e7 cost 70 ms a step and 0.8 GB with 20 persons present
+# (1e8: 6.4 GB; 1e9 overflowed pymunk's int); up to this many the table is what it always was, so runs are unchanged
+HASH_BODIES = 10_000
 SUBSTEPS = 2  # Chipmunk steps per simulation step (dense crowds: fewer overlaps than 1)
 WALL_PASSES = 4  # push-out passes; two walls of a corner may each need one
 FIELDS = batch.BodyFields.POSITION | batch.BodyFields.VELOCITY
@@ -28,7 +33,9 @@ class ContactSolver:
     def __init__(self, walls: np.ndarray, robot_radius: float = 0.0, capacity: int = 1000):
         self.space = pymunk.Space()
         # a spatial hash of body-sized cells: Chipmunk's default tree rebuilds slowly for thousands of bodies
-        self.space.use_spatial_hash(HASH_CELL, 4 * max(capacity, 100))
+        self.capacity = max(capacity, 100)
+        self._hash_bodies = min(self.capacity, HASH_BODIES)  # the bodies the table is sized for
+        self.space.use_spatial_hash(HASH_CELL, 4 * self._hash_bodies)
         self.space.iterations = ITERATIONS
         self.space.collision_slop = COLLISION_SLOP
         # Chipmunk's bias is the share of an overlap left after one second
@@ -56,6 +63,10 @@ class ContactSolver:
             disc.friction = 0.0
             self.space.add(body, disc)
             self.bodies.append(body)
+        if len(self.bodies) > self._hash_bodies and self._hash_bodies < self.capacity:
+            # a bigger table (Chipmunk moves every shape over, the walls too), at most the capacity's
+            self._hash_bodies = min(self.capacity, max(len(self.bodies), 2 * self._hash_bodies))
+            self.space.use_spatial_hash(HASH_CELL, 4 * self._hash_bodies)
         self._reorder()
 
     def keep(self, mask: np.ndarray) -> None:
