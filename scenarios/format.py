@@ -765,7 +765,8 @@ MAP = Schema({
 })
 
 # A file may start with ``base: NAME_OR_PATH``: the base scenario's data, with this file's keys laid over it
-# (mappings merge key by key, lists and values are replaced), before validation. See scenarios.loader.read_raw.
+# (mappings merge key by key, lists and values are replaced, a part given another type is replaced whole; ``!replace``
+# and ``!remove`` say otherwise), before validation. See scenarios.loader.merge and scenarios/reader.py.
 SCENARIO = Schema({
     "name": F("str", required=True, doc="the scenario's name, used in outputs"),
     "description": F("str", "", doc="what happens, in a sentence or two (its first line is listed)"),

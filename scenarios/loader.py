@@ -46,13 +46,17 @@ def resolve(name_or_path: str) -> Path:
     """A bundled name (``airport_disembarkation``), a path to a YAML file, or a PedSim XML scenario file (a folder
     of the bundled name, a run's output say, does not hide the bundled scenario)."""
     path = Path(name_or_path)
-    if path.suffix in (".yaml", ".yml", ".xml") or path.is_file():
-        if not path.is_file():
-            raise ScenarioError(str(path), "<file>", "no such scenario file")
-        return path
-    bundled = BUNDLED / f"{name_or_path}.yaml"
-    if bundled.is_file():
-        return bundled
+    try:
+        if path.suffix in (".yaml", ".yml", ".xml") or path.is_file():
+            if not path.is_file():
+                raise ScenarioError(str(path), "<file>", "no such scenario file")
+            return path
+        bundled = BUNDLED / f"{name_or_path}.yaml"
+        if bundled.is_file():
+            return bundled
+    except (OSError, ValueError) as e:  # a name too long for the file system, a NUL byte
+        raise ScenarioError(str(path)[:80], "<file>", f"not a usable path ({e}); expected a scenario file or a "
+                                                      "bundled name") from None
     names = ", ".join(bundled_scenarios())
     raise ScenarioError(name_or_path, "<scenario>",
                         f"not a bundled scenario, a YAML file nor a PedSim XML file; bundled: {names}")
