@@ -492,10 +492,14 @@ def _cmd_dataset_generate(args) -> int:
     except ImportError as e:
         raise UsageError(f"crowdsim dataset: needs {e.name}, of the data extra: pip install -e \".[data]\"") from None
     scenarios = [_load(args, name) for name in args.scenarios]
-    manifest = generate(scenarios, args.scenarios, Path(args.out), args.episodes, seed=args.seed,
-                        duration=args.duration, workers=args.workers, ray_address=args.ray, rate=args.rate_scale,
-                        density=args.density_scale, route_jitter=args.route_jitter, compression=args.compression,
-                        progress=not args.quiet)
+    try:
+        manifest = generate(scenarios, args.scenarios, args.out, args.episodes, seed=args.seed,  # "" refused as is
+                            duration=args.duration, workers=args.workers, ray_address=args.ray, rate=args.rate_scale,
+                            density=args.density_scale, route_jitter=args.route_jitter, compression=args.compression,
+                            progress=not args.quiet, allow_large=args.allow_large)
+    except BaseException as e:  # a stop or a failure: what was kept (complete episodes) is the generator's to say
+        args.kept = getattr(e, "kept", getattr(args, "kept", "nothing was kept"))
+        raise
     episodes = manifest["episodes"]
     size = sum(f["size"] for e in episodes for f in e["files"].values())
     frames = sum(e["frames"] for e in episodes)
@@ -707,7 +711,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="per episode, every agent cluster's and standing group's count times a factor uniform in "
                         "[LO, HI]")
     p.add_argument("--route-jitter", type=float, default=0.0, metavar="M",
-                   help="per episode, the robot's start and route waypoints each moved within M m (default 0)")
+                   help="per episode, the robot's start and, if it has a route, each route waypoint moved within M "
+                        "m, never through a wall (default 0)")
     p.add_argument("--compression", choices=("gzip", "lzf", "none"), default="gzip",
                    help="sensors.h5's chunk compression (Parquet: zstd unless none; default gzip)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
@@ -747,7 +752,8 @@ def main(argv: list[str] | None = None) -> int:
         try:
             return args.func(args)
         except Error as e:
-            print(f"crowdsim: error: {e}", file=sys.stderr)
+            kept = getattr(e, "kept", None)  # what a command that fails halfway keeps (a dataset's episodes)
+            print(f"crowdsim: error: {e}" + (f"; {kept}" if kept else ""), file=sys.stderr)
             return 2
         except OSError as e:
             if e.errno not in NO_ROOM:

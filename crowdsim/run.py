@@ -35,7 +35,7 @@ from pipeline.frames import compose, inverse
 from scenarios.geometry import wall_segments
 
 from .loop import Simulation
-from .outdir import check_out_dir, write_directory
+from .outdir import write_directory
 
 CSV_HEADER = "frame,t,id,x,y,vx,vy"
 # the ground truth adds, per person, the true distance from the robot, whether within the evaluation's range, the

@@ -29,7 +29,7 @@ def process_pool(workers: int, initializer=None, initargs: tuple = ()):
         processes = list((pool._processes or {}).values())  # the executor has no public way to end its workers
         pool.shutdown(wait=False, cancel_futures=True)
         for process in processes:
-            process.terminate()
+            process.kill()  # they ignore SIGTERM (ignore_stops)
         for process in processes:
             process.join()
         raise

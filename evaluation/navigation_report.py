@@ -62,9 +62,14 @@ def nav_table(names: list[str], runs: list[dict], columns) -> str:
     return "\n".join(lines)
 
 
-def json_safe(figures: dict) -> dict:
-    """The figures with NaN and inf as None (JSON's null)."""
-    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in figures.items()}
+def json_safe(value):
+    """``value`` (figures, a scenario: dicts and lists of them) with NaN and inf as None, JSON's null: strict JSON,
+    which every parser reads."""
+    if isinstance(value, dict):
+        return {k: json_safe(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [json_safe(v) for v in value]
+    return None if isinstance(value, float) and not math.isfinite(value) else value
 
 
 def evaluate_nav_main(run_dirs: list[Path], json_path: Path | None) -> str:

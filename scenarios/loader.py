@@ -392,7 +392,7 @@ def check_places(scenario: dict, source: str) -> None:
     outer = _outer_boundary(scenario["map"]["walls"])
     for (key, p, what, need, why, in_map), d, ins, ok in zip(places, dist, inside, within):
         if in_map and not ok:
-            extent = (f"inside the outer wall" if outer is not None else
+            extent = ("inside the outer wall" if outer is not None else
                       f"within the walls' extent x {lo[0]:g}..{hi[0]:g} m, y {lo[1]:g}..{hi[1]:g} m")
             raise ScenarioError(source, key, f"{what} {_point(p)} lies outside the map; expected it {extent}")
         if ins or d < need:

@@ -2,7 +2,6 @@
 an existing folder; each fault one line naming the flag. And one file written whole or not at all."""
 
 import os
-from pathlib import Path
 
 import pytest
 

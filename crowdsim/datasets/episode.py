@@ -11,13 +11,17 @@ timestamps, JSON with a fixed key order, and nothing records when or where it wa
 
 from __future__ import annotations
 
+import errno
 import json
+import os
 from pathlib import Path
 
 import h5py
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
+
+from evaluation.navigation_report import json_safe
 
 from ..loop import Frame, Simulation
 from ..run import _without_unset
@@ -27,14 +31,79 @@ ROW_GROUP_FRAMES = 250  # tracking cycles a Parquet row group holds (10 s at 25 
 COMPRESSIONS = ("gzip", "lzf", "none")
 
 
+try:
+    import resource
+except ImportError:  # Windows: no file size limit to heed
+    resource = None
+
+
+class Room:
+    """Keeps sensors.h5 from meeting a full disk or the file size limit (``ulimit -f``). HDF5 cannot take a failed
+    write: it reports it late or not at all, and the process crashes when the file is closed. So every block of rows
+    is checked before HDF5 sees it, against what the file could still take: the block, what HDF5 may still hold to
+    write later (its chunk cache, CACHE a dataset; its dirty metadata, METADATA a chunk up to METADATA_CACHE), and
+    SLACK for the file's own structure; the disk must hold that beyond RESERVE, for the episode's tables and
+    meta.json. The tables are checked too, so that they never take the room sensors.h5 needs to be closed. A block
+    that does not fit is an OSError (ENOSPC, or EFBIG for the file size limit) before anything of it is written, and
+    the file, every block before it checked, can still be closed. (Only another process filling the disk between
+    two checks can still catch HDF5 out.)"""
+
+    CACHE = 1 << 20  # h5py's chunk cache per dataset (rdcc_nbytes), written out as chunks are evicted or at close
+    METADATA = 96  # bytes of chunk index and other metadata a chunk may add, written at close ...
+    METADATA_CACHE = 32 << 20  # ... or once HDF5's metadata cache (32 MiB at most by default) is full
+    SLACK = 256 << 10  # the superblock, groups, dataset headers
+    RESERVE = 4 << 20  # bytes kept free on the disk for the tables, meta.json and other writers
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.written: dict[str, int] = {}  # dataset -> raw bytes given to HDF5
+        self.chunks = 0
+
+    def pending(self, written: dict[str, int] | None = None, chunks: int | None = None) -> int:
+        """Bytes HDF5 may still write to the file from what it was given (all of it, at worst, at close)."""
+        written = self.written if written is None else written
+        chunks = self.chunks if chunks is None else chunks
+        return (sum(min(self.CACHE, n) for n in written.values()) + min(self.METADATA * chunks, self.METADATA_CACHE)
+                + self.SLACK)
+
+    def check_h5(self, blocks: dict[str, tuple[int, int]]) -> None:
+        """Before giving HDF5 ``blocks`` (dataset -> (raw bytes, chunks)); they count as given once this passes."""
+        written = dict(self.written)
+        for name, (nbytes, _) in blocks.items():
+            written[name] = written.get(name, 0) + nbytes
+        chunks = self.chunks + sum(c for _, c in blocks.values())
+        need = sum(n for n, _ in blocks.values()) + self.pending(written, chunks)
+        try:
+            size = os.stat(self.path).st_size
+        except FileNotFoundError:
+            size = 0
+        if resource is not None:
+            limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+            if limit != resource.RLIM_INFINITY and size + need > limit:
+                raise OSError(errno.EFBIG, os.strerror(errno.EFBIG), str(self.path))
+        self._check_disk(need)
+        self.written, self.chunks = written, chunks
+
+    def check_table(self, nbytes: int) -> None:
+        """Before writing ``nbytes`` to a table: room for it beside what sensors.h5 still needs."""
+        self._check_disk(nbytes + self.pending())
+
+    def _check_disk(self, need: int) -> None:
+        if hasattr(os, "statvfs"):
+            st = os.statvfs(self.path.parent)
+            if st.f_bavail * st.f_frsize < need + self.RESERVE:
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self.path.parent))
+
+
 class H5Stream:
     """Datasets of one HDF5 group that grow by one row per ``append``, chunked one row per chunk (a frame read alone
-    reads one chunk), compressed per ``compression``; rows wait in a small buffer and go to disk in blocks."""
+    reads one chunk), compressed per ``compression``; rows wait in a small buffer and go to disk in blocks, each
+    checked first against the ``room`` left."""
 
     BLOCK = 32
 
-    def __init__(self, group: h5py.Group, compression: str):
-        self.group, self.compression = group, compression
+    def __init__(self, group: h5py.Group, compression: str, room: Room | None = None):
+        self.group, self.compression, self.room = group, compression, room
         self.rows: dict[str, list] = {}
         self.written = 0
 
@@ -54,6 +123,14 @@ class H5Stream:
             self.flush()
 
     def flush(self) -> None:
+        if self.room is not None:
+            blocks = {}
+            for name, rows in self.rows.items():
+                if rows:  # (raw bytes, chunks): a row a chunk, scalars 1024 to a chunk
+                    blocks[f"{self.group.name}/{name}"] = (sum(r.nbytes for r in rows), len(rows) if rows[0].shape
+                                                           else 1)
+            if blocks:
+                self.room.check_h5(blocks)
         for name, rows in self.rows.items():
             if rows:
                 data = self.group[name]
@@ -67,8 +144,8 @@ class H5Stream:
 class ParquetStream:
     """A Parquet file written a row group at a time, from column blocks (dicts of equal-length arrays)."""
 
-    def __init__(self, path: Path, schema: pa.Schema, compression: str):
-        self.path, self.schema = path, schema
+    def __init__(self, path: Path, schema: pa.Schema, compression: str, room: Room | None = None):
+        self.path, self.schema, self.room = path, schema, room
         self.writer = pq.ParquetWriter(path, schema, compression=None if compression == "none" else "zstd")
         self.blocks: list[dict] = []
         self.frames = 0
@@ -82,11 +159,16 @@ class ParquetStream:
             self.flush()
 
     def flush(self) -> None:
-        if self.blocks:
+        """The waiting blocks as one row group; none when they hold no row (frames without a person, a detection
+        or a track: the reader gives those frames empty arrays). A table without a row is a valid table: the
+        schema and no row group."""
+        if any(len(b["frame"]) for b in self.blocks):
             table = pa.table({name: np.concatenate([b[name] for b in self.blocks])
                               for name in self.schema.names}, schema=self.schema)
+            if self.room is not None:
+                self.room.check_table(table.nbytes)
             self.writer.write_table(table, row_group_size=len(table))
-            self.blocks.clear()
+        self.blocks.clear()
 
     def close(self) -> None:
         self.flush()
@@ -141,17 +223,19 @@ class EpisodeWriter:
         self.depth = [c.name for c in sim.depth_cameras]
         self.wall = [c.name for c in sim.wall_cameras]
         self.types = np.array(list(sim.scenario["crowd"]["agent_types"]), dtype=object)
+        room = Room(self.out / "sensors.h5")
+        room.check_h5({})  # room for the file's structure before HDF5 writes any of it
         self.h5 = h5py.File(self.out / "sensors.h5", "w", track_order=False)
         self.h5.attrs["format_version"] = FORMAT_VERSION
-        self.streams = {"robot": H5Stream(self.h5.create_group("robot"), compression)}
+        self.streams = {"robot": H5Stream(self.h5.create_group("robot"), compression, room)}
         for name in self.lasers:
-            self.streams[name] = H5Stream(self.h5.create_group(f"lasers/{name}"), compression)
+            self.streams[name] = H5Stream(self.h5.create_group(f"lasers/{name}"), compression, room)
         for name in self.depth + self.wall:
-            self.streams[name] = H5Stream(self.h5.create_group(f"cameras/{name}"), compression)
+            self.streams[name] = H5Stream(self.h5.create_group(f"cameras/{name}"), compression, room)
         self.persons = ParquetStream(self.out / "persons.parquet",
-                                     persons_schema(self.lasers, self.depth + self.wall), compression)
-        self.detections = ParquetStream(self.out / "detections.parquet", DETECTIONS_SCHEMA, compression)
-        self.tracks = ParquetStream(self.out / "tracks.parquet", TRACKS_SCHEMA, compression)
+                                     persons_schema(self.lasers, self.depth + self.wall), compression, room)
+        self.detections = ParquetStream(self.out / "detections.parquet", DETECTIONS_SCHEMA, compression, room)
+        self.tracks = ParquetStream(self.out / "tracks.parquet", TRACKS_SCHEMA, compression, room)
         self.boxes: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}  # camera -> its latest ids and boxes
         self.frames = 0
 
@@ -210,14 +294,26 @@ class EpisodeWriter:
         return columns
 
     def close(self, complete: bool) -> None:
-        """Flush and close every file; with ``complete``, write meta.json last."""
-        for stream in self.streams.values():
-            stream.flush()
-        self.h5.close()
-        for table in (self.persons, self.detections, self.tracks):
-            table.close()
+        """Flush and close every file; with ``complete``, write meta.json last. An incomplete episode (an error, an
+        interruption) is closed without flushing what waits, every file closed whatever fails, and the folder is
+        the caller's to remove."""
         if complete:
-            self._write_meta()
+            try:
+                for stream in self.streams.values():
+                    stream.flush()
+                self.h5.close()
+                for table in (self.persons, self.detections, self.tracks):
+                    table.close()
+                self._write_meta()
+                return
+            except BaseException:
+                self.close(False)
+                raise
+        for close in (self.h5.close, *(t.writer.close for t in (self.persons, self.detections, self.tracks))):
+            try:
+                close()
+            except Exception:  # noqa: BLE001 - the error that stopped the episode is the one to report
+                pass
 
     def _write_meta(self) -> None:
         sim = self.sim
@@ -231,7 +327,8 @@ class EpisodeWriter:
                 "agent_types": list(self.types),
                 "calibration": calibration(sim.scenario, sim.lasers, sim.depth_cameras, sim.wall_cameras),
                 "scenario": scenario}
-        (self.out / "meta.json").write_text(json.dumps(meta, indent=1) + "\n")
+        # strict JSON: a source's endless stop (inf) is null
+        (self.out / "meta.json").write_text(json.dumps(json_safe(meta), indent=1, allow_nan=False) + "\n")
 
 
 def _odom_pose(frame: Frame) -> np.ndarray:

@@ -12,6 +12,8 @@ import json
 
 import numpy as np
 
+from ..errors import Error
+
 FORMAT_VERSION = "1.0"
 MANIFEST = "manifest.json"
 EPISODE_FILES = ("meta.json", "sensors.h5", "persons.parquet", "detections.parquet", "tracks.parquet")
@@ -23,8 +25,9 @@ FUSED = "fusion"  # detections.parquet's detector name for the fused detections,
 MINI_EPISODES = {"train": 2, "val": 1, "test": 1}  # the first episodes of each split that make up `mini`
 
 
-class DatasetError(ValueError):
-    """A dataset command that cannot go on: names the folder, option or file, and what was expected."""
+class DatasetError(Error):
+    """A dataset command that cannot go on: names the folder, option or file, and what was expected (a
+    ``crowdsim.Error``, so the command line prints it as one line)."""
 
 
 def episode_id(index: int) -> str:
