@@ -758,7 +758,10 @@ def main(argv: list[str] | None = None) -> int:
         except OSError as e:
             if e.errno not in NO_ROOM:
                 raise
-            print(f"crowdsim: error: {e.filename or 'a file'}: {e.strerror}; expected room to write the output "
+            from .outdir import final_path
+
+            where = f"{final_path(str(e.filename))}: " if e.filename else ""
+            print(f"crowdsim: error: {where}{e.strerror}; expected room to write the output "
                   f"({getattr(args, 'kept', 'nothing was kept')})", file=sys.stderr)
             return 2
         except Stopped as e:

@@ -63,7 +63,9 @@ def check_out_dir(out: Path, flag: str = "--out") -> None:
         raise RunDirError(f"{flag}: empty; expected the path of a folder (or leave the flag out for the default)")
     out = Path(out)
     folder = _where_made(out, flag)
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+    if out.exists() and not out.is_dir():
+        raise RunDirError(f"{flag} {out}: is a file; expected a new or empty directory (nothing was written)")
+    if out.exists() and any(out.iterdir()):
         raise RunDirError(f"{flag} {out}: already exists and is not empty; expected a new or empty directory "
                           f"(nothing was written)")
     _can_write(folder, out, flag)
@@ -108,6 +110,12 @@ def _alive(pid: int) -> bool:
     except PermissionError:  # someone else's process: alive
         return True
     return True
+
+
+def final_path(path: str) -> str:
+    """``path`` with a temporary directory of ``write_directory`` named as the directory it becomes: what a user
+    asked for, in messages."""
+    return re.sub(rf"(^|/)\.([^/]+)\.{_TAG}-[^/]+", r"\1\2", path)
 
 
 def remove_stale(parent: Path) -> list[Path]:

@@ -206,7 +206,10 @@ class CsvWriter:
             for column, names in self.names.items():
                 table[:, column] = names[table[:, column].astype(int)]
         # one format over the whole block: the text ``np.savetxt`` writes row by row, in one string
-        self.file.write((",".join(self.fmt) + "\n") * len(table) % tuple(table.ravel().tolist()))
+        try:
+            self.file.write((",".join(self.fmt) + "\n") * len(table) % tuple(table.ravel().tolist()))
+        except OSError as e:  # a full disk, say: the error names the file
+            raise OSError(e.errno, e.strerror, self.file.name) from None
         self.rows = 0
 
     def close(self) -> None:

@@ -40,7 +40,7 @@ def test_json_and_motchallenge_are_checked_before_scoring(tmp_path, capsys):
     assert main([*base, "--json", str(tmp_path / "missing" / "m.json")]) == 2
     assert "the folder" in one_error(capsys) and not (tmp_path / "missing").exists()
     assert main([*base, "--motchallenge", str(gt)]) == 2
-    assert one_error(capsys).startswith(f"crowdsim: error: --motchallenge {gt}: already exists")
+    assert one_error(capsys).startswith(f"crowdsim: error: --motchallenge {gt}: is a file; expected a new or empty")
     assert main([*base, "--threshold", "nan"]) == 2 and "--threshold nan" in one_error(capsys)
     assert main([*base, "--max-range", "-1"]) == 2 and "--max-range -1.0" in one_error(capsys)
     assert main([*base, "--json", str(tmp_path / "m.json"), "--motchallenge", str(tmp_path / "mot")]) == 0
