@@ -72,8 +72,10 @@ def _cmd_evaluate(args) -> int:
     from .outdir import check_out_dir, write_directory, write_file
 
     _check_json(args)
-    if args.motchallenge:
-        check_out_dir(Path(args.motchallenge), "--motchallenge")
+    if args.motchallenge is not None:
+        check_out_dir(args.motchallenge, "--motchallenge")  # as given: "" is refused, not ignored
+    if args.visible_column is not None and not args.visible_column.strip():
+        raise UsageError("--visible-column: empty; expected the name of the ground truth's visibility column")
     if not (math.isfinite(args.threshold) and args.threshold > 0):
         raise UsageError(f"--threshold {args.threshold}: expected a distance above 0 m")
     if args.max_range is not None and not (args.max_range > 0):  # inf: no limit
@@ -93,7 +95,7 @@ def _cmd_evaluate(args) -> int:
                        max_range=args.max_range)
 
     if args.runs:
-        if args.motchallenge:
+        if args.motchallenge is not None:
             raise EvaluationInputError("--motchallenge exports one pair of files: give --gt and --tracks")
         runs = [score_tracking(files(Path(d) / "groundtruth.csv", Path(d) / "tracks.csv"), args.threshold)
                 for d in args.runs]
@@ -128,7 +130,7 @@ def _cmd_evaluate(args) -> int:
         print(groups_table(report["groups"]))
     if args.json:
         write_file(Path(args.json), json.dumps(report, indent=2) + "\n")
-    if args.motchallenge:
+    if args.motchallenge is not None:
         first = pair.first_frame or 0
 
         def motchallenge(tmp: Path) -> None:
@@ -535,8 +537,16 @@ def _cmd_dataset_evaluate_detector(args) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the command's one-line errors: ``crowdsim: error: COMMAND: what was wrong`` and a pointer to
+    the help, not a usage block (its subcommands' parsers are made of this class too)."""
+
+    def error(self, message: str):
+        self.exit(2, f"crowdsim: error: {self.prog}: {message} (see `{self.prog} --help`)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="crowdsim", description=__doc__)
+    parser = _Parser(prog="crowdsim", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("run", help="simulate a scenario, track, score, and write a run directory")
     p.add_argument("scenario", help="a bundled scenario name (see `crowdsim scenarios`) or a YAML file")
@@ -744,7 +754,7 @@ NO_ROOM = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .stops import Stopped, end_by, stops_as_exceptions
+    from .stops import Stopped, stops_as_exceptions
 
     args = build_parser().parse_args(argv)
     with warnings.catch_warnings(), stops_as_exceptions():  # both restored on return
@@ -767,9 +777,7 @@ def main(argv: list[str] | None = None) -> int:
         except Stopped as e:
             print(f"crowdsim: stopped by {e}; {getattr(args, 'kept', 'nothing was written')}", file=sys.stderr,
                   flush=True)
-            signum = e.signum
-    end_by(signum)
-    return 128 + signum  # pragma: no cover - the signal ends the process first
+            return 128 + e.signum  # the status a shell gives a process that the signal ended
 
 
 if __name__ == "__main__":

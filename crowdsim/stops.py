@@ -1,11 +1,12 @@
 """Clean stops: SIGTERM and SIGINT become one exception in the main process, so that every ``finally`` and
 ``except BaseException`` on the way out runs (a partial output folder is removed, worker processes are ended), the
-command prints one line saying what was kept, and the process then ends by the same signal, as its caller expects.
-Worker processes ignore both: the main process alone decides what to keep and ends them."""
+command prints one line saying what was kept, and the process exits with the status a shell gives a process ended
+by that signal (128 + its number: 143, 130). It exits rather than kills itself, so that the interpreter's own
+clean-up runs too (multiprocessing's semaphores, which a process killed by a signal leaves to its resource tracker to
+complain about). Worker processes ignore both: the main process alone decides what to keep and ends them."""
 
 from __future__ import annotations
 
-import os
 import signal
 from contextlib import contextmanager
 
@@ -37,10 +38,21 @@ def stops_as_exceptions():
             signal.signal(s, handler)
 
 
-def end_by(signum: int) -> None:
-    """End this process by ``signum`` with its default action, so the caller sees the signal's status."""
-    signal.signal(signum, signal.SIG_DFL)
-    os.kill(os.getpid(), signum)
+@contextmanager
+def stops_held():
+    """SIGINT and SIGTERM held back within the block (workers being ended, a folder being tidied), so that a second
+    Ctrl-C cannot leave the work half done; one that came meanwhile is dropped (the first is being handled)."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, set(SIGNALS))
+    try:
+        yield
+    finally:
+        try:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        except KeyboardInterrupt:  # the held Ctrl-C, delivered as the mask lifts
+            pass
 
 
 def ignore_stops() -> None:

@@ -8,7 +8,7 @@ from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 from multiprocessing import get_context
 
-from .stops import ignore_stops
+from .stops import ignore_stops, stops_held
 
 
 def _start(initializer, initargs) -> None:
@@ -26,11 +26,12 @@ def process_pool(workers: int, initializer=None, initargs: tuple = ()):
     try:
         yield pool
     except BaseException:
-        processes = list((pool._processes or {}).values())  # the executor has no public way to end its workers
-        pool.shutdown(wait=False, cancel_futures=True)
-        for process in processes:
-            process.kill()  # they ignore SIGTERM (ignore_stops)
-        for process in processes:
-            process.join()
+        with stops_held():
+            processes = list((pool._processes or {}).values())  # no public handle on the workers before 3.14
+            for process in processes:
+                process.kill()  # they ignore SIGTERM (ignore_stops), and what they were doing is not to be finished
+            pool.shutdown(wait=False, cancel_futures=True)
+            for process in processes:
+                process.join()
         raise
     pool.shutdown()

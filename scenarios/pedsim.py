@@ -168,6 +168,9 @@ def _parse(path: Path) -> _Element:
     except expat.ExpatError as e:
         raise ScenarioError(source, "<file>", f"not valid XML at line {e.lineno}, column {e.offset + 1}: "
                                               f"{expat.ErrorString(e.code)}") from None
+    except (LookupError, UnicodeError) as e:  # an encoding the declaration names that Python has not, or breaks
+        raise ScenarioError(source, "<file>", f"cannot be decoded ({e}); expected UTF-8 or another encoding the "
+                                              "XML declaration names rightly") from None
     root = roots[0]
     if root.tag != "scenario":
         raise ScenarioError(source, f"<{root.tag}> at line {root.line}",

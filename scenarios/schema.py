@@ -132,9 +132,17 @@ def _describe(v: Any) -> str:
     return f"{type(v).__name__} {text}" if len(text) <= 60 else type(v).__name__
 
 
+def _finite(c: Any) -> bool:
+    """A number that is a finite float (an integer of hundreds of digits is none)."""
+    try:
+        return _is_number(c) and math.isfinite(float(c))
+    except OverflowError:
+        return False
+
+
 def _check_point(v: Any, n: int, where: Callable[[str], ScenarioError], what: str):
-    if not isinstance(v, (list, tuple)) or len(v) != n or not all(_is_number(c) and math.isfinite(c) for c in v):
-        raise where(f"expected {what} (a list of {n} numbers), got {_describe(v)}")
+    if not isinstance(v, (list, tuple)) or len(v) != n or not all(_finite(c) for c in v):
+        raise where(f"expected {what} (a list of {n} finite numbers), got {_describe(v)}")
     return [float(c) for c in v]
 
 

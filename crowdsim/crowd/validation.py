@@ -41,7 +41,6 @@ from .crowd import Crowd  # noqa: E402
 DT = 0.04  # s, the project's simulation step
 WALL_TOL = 1e-9  # m: a body may touch a wall, not enter it
 LASERS = [{"name": "front_laser", "mount": [0.25, 0, 0]}, {"name": "rear_laser", "mount": [-0.25, 0, float(np.pi)]}]
-PARKED_ROBOT = [-1000.0, -1000.0, 0.0]  # the robot waits far from every floor plan here
 
 # Weidmann 1993 (Transporttechnik der Fussgaenger, ETH Zuerich, Schriftenreihe IVT 90): free speed 1.34 m/s,
 # gamma 1.913 persons/m^2, jam density 5.4 persons/m^2
@@ -66,15 +65,19 @@ def weidmann(rho) -> np.ndarray:
 # -- floor plans, placement, and the watch over every step ------------------------------------------------------
 
 
-def _scenario(name: str, walls: list, waypoints: dict, routes: dict, params: dict | None = None) -> dict:
-    """A validation scenario: the model's defaults, but no random force (the checks measure the model itself)."""
+def _scenario(name: str, walls: list, waypoints: dict, routes: dict, params: dict | None = None,
+              robot_at: list | None = None) -> dict:
+    """A validation scenario: the model's defaults, but no random force (the checks measure the model itself). The
+    crowd runs without the robot; the robot the format requires stands in the floor plan, at ``robot_at`` or else
+    the first waypoint."""
+    first = robot_at or next(iter(waypoints.values()), {"position": [0.0, 0.0]})["position"]
     return scenario_from_dict({
         "name": name,
         "crowd": {"random_force": 0.0, **(params or {})},
         "map": {"walls": [np.asarray(w, float).tolist() for w in walls]},
         "waypoints": waypoints,
         "routes": routes,
-        "robot": {"start": PARKED_ROBOT},
+        "robot": {"start": [*first, 0.0]},
         "sensors": {"lasers": LASERS},
     }, source=f"<validation {name}>")
 
@@ -610,7 +613,7 @@ def bottleneck_run(width: float, n: int, seed: int = 0, limit: float = 200.0, pa
                       [x_end + far, side + far], [x_end, side + far], [x_end, y_hi], [side, y_hi], [side, side],
                       [0, side]], float)
     sc = _scenario("bottleneck", walls, {"out": {"position": [x_end + 3.0, side / 2], "radius": 1.5}},
-                   {"r": {"waypoints": ["out"], "sink": True}}, params)
+                   {"r": {"waypoints": ["out"], "sink": True}}, params, robot_at=[side / 2, side / 2])
     rng = np.random.default_rng(seed)
     crowd = Crowd(sc, rng)
     radius = crowd.types.radius[crowd.types.names.index("adult")]

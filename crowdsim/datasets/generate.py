@@ -26,8 +26,7 @@ import re
 import shutil
 import signal
 import threading
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from contextlib import contextmanager
+from concurrent.futures import FIRST_COMPLETED, wait
 from multiprocessing import get_context
 from pathlib import Path
 
@@ -38,6 +37,8 @@ from scenarios.geometry import closest_on_segments, segments_cross, wall_segment
 
 from .. import __version__
 from ..outdir import RunDirError, check_out_dir
+from ..stops import stops_held
+from ..workers import process_pool
 from .episode import COMPRESSIONS, write_episode
 from .layout import (EPISODE_FILES, DatasetError, FORMAT_VERSION, MANIFEST, SPLITS, episode_id, episode_seeds, file_digest,
                      in_mini, scenario_digest, split_of)
@@ -179,10 +180,8 @@ _worker: dict = {}
 
 
 def _start_worker(counter) -> None:
-    """A pool worker: the shared frame counter; deaf to SIGINT and SIGTERM (a terminal's Ctrl-C reaches the whole
-    process group): the main process decides what to keep, kills the workers and tidies the folder."""
-    for s in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(s, signal.SIG_IGN)
+    """A pool worker (deaf to stops, crowdsim/workers.py: the main process decides what to keep, ends the workers
+    and tidies the folder): the shared frame counter."""
     _worker["counter"] = counter
 
 
@@ -357,23 +356,6 @@ def _check_variations(planned: list[dict], allow_large: bool, rate, density, rou
             raise DatasetError(f"{', '.join(options)}: {e} (nothing was written)") from None
 
 
-@contextmanager
-def _signals_held():
-    """SIGINT and SIGTERM held back while the workers are stopped and the folder is tidied, so that a second Ctrl-C
-    cannot leave it half-tidied; one that came meanwhile is dropped (the first is being handled)."""
-    if not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
-    try:
-        yield
-    finally:
-        try:
-            signal.pthread_sigmask(signal.SIG_SETMASK, old)
-        except KeyboardInterrupt:
-            pass
-
-
 def _listed(root: Path) -> list[str]:
     try:
         return [e["id"] for e in json.loads((root / MANIFEST).read_text())["episodes"]]
@@ -485,7 +467,7 @@ def generate(scenarios: list[dict], names: list[str], out: Path, episodes: int, 
         finally:
             results.close()  # stops the workers when the loop ends early
     except BaseException as e:
-        with _signals_held():
+        with stops_held():
             frames_bar.close()
             episodes_bar.close()
             kept = _kept(out, _tidy(out, header, done, made, had_manifest), episodes, made)
@@ -506,19 +488,6 @@ def generate(scenarios: list[dict], names: list[str], out: Path, episodes: int, 
     return json.loads((out / MANIFEST).read_text())
 
 
-def _stop_pool(pool: ProcessPoolExecutor) -> None:
-    """Stop a process pool now: the episodes not begun cancelled, the workers killed (they ignore SIGTERM, and an
-    episode of theirs is to be removed, not finished) and waited for; their temporary folders are the caller's to
-    remove once they are gone."""
-    with _signals_held():
-        processes = list((getattr(pool, "_processes", None) or {}).values())  # no public handle before 3.14
-        for process in processes:
-            process.kill()
-        pool.shutdown(wait=False, cancel_futures=True)
-        for process in processes:
-            process.join()
-
-
 def _run_with_processes(jobs, out, compression, workers, _address, frames_bar):
     """Episodes in this process (one worker) or in ``workers`` spawned processes; yields each entry as it ends.
     An error in one episode stops the others (the complete ones are yielded first); so does anything that stops
@@ -528,9 +497,7 @@ def _run_with_processes(jobs, out, compression, workers, _address, frames_bar):
             yield make_episode(job, out, compression, lambda stamp: frames_bar.update())
         return
     counter = get_context("spawn").Value("q", 0)
-    pool = ProcessPoolExecutor(workers, mp_context=get_context("spawn"), initializer=_start_worker,
-                               initargs=(counter,))
-    try:
+    with process_pool(workers, _start_worker, (counter,)) as pool:  # ends the workers on any exception
         pending = {pool.submit(_run_local, job, str(out), compression) for job in jobs}
         while pending:
             finished, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
@@ -541,10 +508,6 @@ def _run_with_processes(jobs, out, compression, workers, _address, frames_bar):
                     yield future.result()
             if failed:
                 raise failed[0].exception()
-    except BaseException:
-        _stop_pool(pool)
-        raise
-    pool.shutdown()
 
 
 def _run_with_ray(jobs, out, compression, workers, address, frames_bar):
@@ -576,7 +539,7 @@ def _run_with_ray(jobs, out, compression, workers, address, frames_bar):
                 frames_bar.update(entry["frames"])
                 yield entry
     except BaseException:
-        with _signals_held():
+        with stops_held():
             for ref in pending:
                 try:
                     ray.cancel(ref, force=True)
