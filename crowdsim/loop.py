@@ -118,7 +118,8 @@ class Simulation:
         robot = scenario["robot"]
         self.driver = robot["driver"]
         self.goals = np.asarray(robot["goals"] or np.zeros((0, 2)), float).reshape(-1, 2)
-        self.planner = build_planner(robot["planner"], robot) if self.driver in ("goals", "follow") else None
+        self.planner = (build_planner(robot["planner"], robot, scenario.get("source", "<scenario>"))
+                        if self.driver in ("goals", "follow") else None)
         self.follower = (PersonFollower(self.planner, tuple(robot["follow"]["band"])) if self.driver == "follow"
                          else None)
         self.reset()

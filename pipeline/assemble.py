@@ -8,6 +8,7 @@ each built-in type's parameters under the same names; a test keeps the two regis
 
 from __future__ import annotations
 
+import traceback
 from dataclasses import dataclass
 from typing import Protocol, Sequence
 
@@ -105,6 +106,15 @@ RETURNS = {
 }
 
 
+def user_failure(e: Exception, what: str, source: str, key: str) -> ScenarioError:
+    """A user's part that raised ``e``, as one error naming the part, the exception and the line of the user's code
+    it came from."""
+    frames = traceback.extract_tb(e.__traceback__)
+    where = f" at {frames[-1].filename}:{frames[-1].lineno}" if frames else ""
+    return ScenarioError(source, key, f"{what} {type(e).__name__}: {e}{where}; expected the part to run without "
+                                      "an exception")
+
+
 def check_outputs(part, role: str, source: str, key: str):
     """``part`` (a user's) with its role's method checked: a wrong return type is one ScenarioError naming the
     part's key and what was expected, not an AttributeError deep in the next part. The check is laid on the instance,
@@ -114,7 +124,12 @@ def check_outputs(part, role: str, source: str, key: str):
     name = f"{type(part).__module__}:{type(part).__qualname__}.{method}"
 
     def checked(*args, **kwargs):
-        out = call(*args, **kwargs)
+        try:
+            out = call(*args, **kwargs)
+        except ScenarioError:
+            raise
+        except Exception as e:  # the user's code failed: one error naming the part and where, not our traceback
+            raise user_failure(e, f"{name} raised", source, f"{key}.type") from None
         if not test(out):
             raise ScenarioError(source, f"{key}.type", f"{name} returned {type(out).__name__}; expected {expected} "
                                                        "(pipeline.types)")
@@ -127,20 +142,30 @@ def check_outputs(part, role: str, source: str, key: str):
     return part
 
 
+def make_user_part(path: str, params: dict, source: str, key: str):
+    """A user's class ``module.path:ClassName`` made as ``Class(**params)``; whatever its constructor raises is one
+    error naming the key."""
+    try:
+        return import_class(path)(**params)
+    except ScenarioError:
+        raise
+    except Exception as e:
+        raise user_failure(e, f"{path}(...) raised", source, f"{key}.type") from None
+
+
 def build_part(spec: dict, registry: dict[str, type], source: str = "<pipeline>", key: str = "pipeline"):
     """The part ``spec`` names (``type`` and the parameters), made from its built-in type or a user's class (its
     outputs checked, ``check_outputs``); a parameter the part refuses (a model file that is not there, say) is a
     ScenarioError of ``source`` at ``key``."""
     params = {name: value for name, value in spec.items() if name != "type"}
-    cls = registry[spec["type"]] if spec["type"] in registry else import_class(spec["type"])
-    try:
-        part = cls(**params)
-    except ScenarioError:
-        raise
-    except ValueError as e:
-        raise ScenarioError(source, key, str(e)) from None
     if spec["type"] in registry:
-        return part
+        try:
+            return registry[spec["type"]](**params)
+        except ScenarioError:
+            raise
+        except ValueError as e:  # a parameter the part refuses (a model file that is not there, say)
+            raise ScenarioError(source, key, str(e)) from None
+    part = make_user_part(spec["type"], params, source, key)
     role = next(role for role, known in (("detector", DETECTORS), ("fusion", FUSIONS), ("tracker", TRACKERS),
                                          ("groups", GROUP_STAGES)) if known is registry)
     return check_outputs(part, role, source, key)

@@ -191,6 +191,7 @@ def check_costs(scenario: dict, source: str, allow_large: bool = False) -> None:
     the ``MAX_*`` limits (unless ``allow_large``), with one ScenarioError naming the key, its value and the limit."""
     _check_people_at_start(scenario, source)
     _check_robot(scenario, source)
+    _check_walkers(scenario, source)
     if allow_large:
         return
     _check_steps(scenario, source)
@@ -323,6 +324,21 @@ def _check_robot(scenario: dict, source: str) -> None:
                             f"{dt:g} s, more than a quarter turn: its planners' steering would turn past the heading "
                             f"they aim for and oscillate; expected at most {fastest:.3g} rad/s (pi / 2 / dt), or a "
                             f"smaller dt" + NOT_A_COST)
+
+
+def _check_walkers(scenario: dict, source: str) -> None:
+    """A walker moves at most max_speed_factor x its speed_max: within a step, no farther than its radius (the
+    contacts, like the robot's, look at each disc once a step)."""
+    crowd, dt = scenario["crowd"], scenario["dt"]
+    for name, t in crowd["agent_types"].items():
+        fastest = crowd["max_speed_factor"] * t["speed_max"]
+        if fastest * dt > STEP_MOVE_RADII * t["radius"]:
+            raise ScenarioError(source, f"crowd.agent_types.{name}.speed_max",
+                                f"{t['speed_max']:g} m/s, times crowd.max_speed_factor {crowd['max_speed_factor']:g}, "
+                                f"moves a walker {fastest * dt:.3g} m in one step of {dt:g} s, more than its radius "
+                                f"({t['radius']:g} m): it would pass walls and people unseen; expected at most "
+                                f"{STEP_MOVE_RADII * t['radius'] / dt / crowd['max_speed_factor']:.3g} m/s, or a "
+                                f"smaller dt" + NOT_A_COST)
 
 
 def _check_map(scenario: dict, source: str) -> None:

@@ -348,10 +348,12 @@ def check_places(scenario: dict, source: str) -> None:
         return
     body = max((t["radius"] for t in scenario["crowd"]["agent_types"].values()), default=0.25)
     robot = scenario["robot"]
-    places = []  # (key, point, what, clearance, what the clearance is, whether it must lie within the map)
+    places = []  # (key, point, what, clearance, what the clearance is, whether it must lie within the map, the
+    #              radius of the body standing there: nearer a wall than this, it is inside it)
 
-    def add(key, point, what, clearance=body, why="the largest body radius", in_map=True):
-        places.append((key, [float(c) for c in point[:2]], what, clearance, why, in_map))
+    def add(key, point, what, clearance=body, why="the largest body radius", in_map=True, disc=None):
+        places.append((key, [float(c) for c in point[:2]], what, clearance, why, in_map,
+                       clearance if disc is None else disc))
 
     def area(key, centre, size, what, in_map=True):  # an area's corners lie in the map (clearance 0)
         half = np.asarray(size, float) / 2
@@ -365,8 +367,10 @@ def check_places(scenario: dict, source: str) -> None:
     for i, src in enumerate(scenario["sources"]):
         add(f"sources[{i}].position", src["position"], "source")
         area(f"sources[{i}].size", src["position"], src["size"], "the source's area")
-    for i, g in enumerate(scenario["standing"]):
-        add(f"standing[{i}].position", g["position"], "standing place")
+    for i, g in enumerate(scenario["standing"]):  # the members stand on a circle round it (turned at random)
+        ring = g["spacing"] / (2 * np.sin(np.pi / g["count"])) if g["count"] > 1 else 0.0
+        add(f"standing[{i}].position", g["position"], "standing place", body + ring,
+            "the largest body radius" + (f" beyond the group's circle of {ring:.2f} m" if ring else ""), disc=body)
     for i, c in enumerate(scenario["clusters"]):  # a cluster may wait outside a door; one inside stays inside
         add(f"clusters[{i}].position", c["position"], "cluster", in_map=False)
         area(f"clusters[{i}].spread", c["position"], c["spread"], "the cluster's start area",
@@ -390,15 +394,16 @@ def check_places(scenario: dict, source: str) -> None:
     within = _within(scenario, segs, pts)
     lo, hi = segs.reshape(-1, 2).min(axis=0), segs.reshape(-1, 2).max(axis=0)
     outer = _outer_boundary(scenario["map"]["walls"])
-    for (key, p, what, need, why, in_map), d, ins, ok in zip(places, dist, inside, within):
+    for (key, p, what, need, why, in_map, disc), d, ins, ok in zip(places, dist, inside, within):
         if in_map and not ok:
             extent = ("inside the outer wall" if outer is not None else
                       f"within the walls' extent x {lo[0]:g}..{hi[0]:g} m, y {lo[1]:g}..{hi[1]:g} m")
             raise ScenarioError(source, key, f"{what} {_point(p)} lies outside the map; expected it {extent}")
         if ins or d < need:
             where = "inside an obstacle" if ins else f"{d:.2f} m from a wall"
-            raise ScenarioError(source, key, f"{what} {_point(p)} lies inside a wall ({where}); expected at least "
-                                             f"{need:g} m ({why}) of clearance from every wall")
+            verb = "lies inside a wall" if ins or d < disc else "is too near a wall"
+            raise ScenarioError(source, key, f"{what} {_point(p)} {verb} ({where}); expected at least {need:.3g} m "
+                                             f"({why}) of clearance from every wall")
 
 
 def _within(scenario: dict, segs: np.ndarray, points) -> np.ndarray:

@@ -44,6 +44,8 @@ class _StrictLoader(yaml.SafeLoader):
     def construct_mapping(self, node, deep=False):
         lines: dict = {}
         for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":  # `<<: *base`: merged keys may be overridden
+                continue
             key = self.construct_object(key_node, deep=True)
             try:
                 first = lines.setdefault(key, key_node.start_mark.line + 1)
@@ -107,8 +109,9 @@ def read_yaml(path: Path):
         text = Path(path).read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as e:
         raise ScenarioError(source, "<file>", f"cannot be read as UTF-8 text: {e}") from None
-    loader = _StrictLoader(text)
+    loader = None
     try:
+        loader = _StrictLoader(text)  # its reader refuses characters YAML does not allow (a NUL, say) at once
         node = loader.get_single_node()
         if node is None:
             return None
@@ -124,4 +127,5 @@ def read_yaml(path: Path):
         problem = getattr(e, "problem", None) or str(e).splitlines()[0]
         raise ScenarioError(source, "<file>", f"not valid YAML{where}: {problem}") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()

@@ -142,7 +142,7 @@ def _finite(c: Any) -> bool:
 
 def _check_point(v: Any, n: int, where: Callable[[str], ScenarioError], what: str):
     if not isinstance(v, (list, tuple)) or len(v) != n or not all(_finite(c) for c in v):
-        raise where(f"expected {what} (a list of {n} finite numbers), got {_describe(v)}")
+        raise where(f"expected {what} (a list of {n} numbers, finite), got {_describe(v)}")
     return [float(c) for c in v]
 
 

@@ -119,3 +119,22 @@ def test_a_user_tracker_returning_none_is_one_error_naming_it(tmp_path, monkeypa
     assert err == [f"crowdsim: error: {path}: pipeline.tracker.type: none_trackers:Nothing.update returned NoneType; "
                    "expected TrackedPersons (pipeline.types)"]
     assert not (tmp_path / "out").exists()
+
+
+def test_a_user_part_that_raises_is_one_error_naming_it_and_its_line(tmp_path, monkeypatch, capsys):
+    (tmp_path / "raising_parts.py").write_text(
+        "class Broken:\n    def __init__(self):\n        raise RuntimeError('no model here')\n"
+        "    def update(self, stamp, detections):\n        pass\n    def reset(self):\n        pass\n\n"
+        "class Failing:\n    def update(self, stamp, detections):\n        return 1 / 0\n"
+        "    def reset(self):\n        pass\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    module = tmp_path / "raising_parts.py"
+    for name, said in (("Broken", f"raising_parts:Broken(...) raised RuntimeError: no model here at {module}:3"),
+                       ("Failing", f"raising_parts:Failing.update raised ZeroDivisionError: division by zero at "
+                                   f"{module}:11")):
+        path = write(tmp_path, f"{name}.yaml", f"base: passers_by\nwarmup: 0\npipeline:\n  tracker: "
+                                                f"{{type: raising_parts:{name}}}\n")
+        assert main(["run", str(path), "--duration", "1", "--quiet", "--out", str(tmp_path / "out")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"crowdsim: error: {path}: pipeline.tracker.type: {said}; "), err
+        assert not (tmp_path / "out").exists()

@@ -28,17 +28,11 @@ from crowdsim.datasets.export import export_dataset
 from crowdsim.datasets.generate import generate, vary
 from crowdsim.datasets.layout import DatasetError, file_digest
 from scenarios import load_scenario, scenario_from_dict
+from test_dataset_generate import ROOM as GENERATE_ROOM
 
-ROOM = {
-    "name": "robust_room", "seed": 4, "warmup": 1.0, "duration": 1.0,
-    "map": {"walls": [[[0, 0], [14, 0], [14, 10], [0, 10], [0, 0]]]},
-    "waypoints": {"east": {"position": [12, 5], "radius": 1.0}},
-    "routes": {"across": {"waypoints": ["east"]}},
-    "sources": [{"position": [2, 5], "size": [1, 4], "rate": 2.0, "routes": {"across": 1.0}}],
-    "standing": [{"position": [7, 8], "count": 3}],
-    "robot": {"start": [6, 2, 1.5708], "route": [[6, 6], [9, 6]]},
-    "sensors": {"lasers": [{"name": "front_laser", "mount": [0.25, 0, 0]}]},
-}
+# test_dataset_generate's room, longer warm-up cut short and with one laser
+ROOM = {**GENERATE_ROOM, "name": "robust_room", "warmup": 1.0, "duration": 1.0,
+        "sensors": {"lasers": GENERATE_ROOM["sensors"]["lasers"][:1]}}
 # the same room with a colour depth camera: an episode about ten times the bytes of one of ROOM
 CAMERAS = {**ROOM, "name": "robust_room_cameras",
            "sensors": {**ROOM["sensors"], "depth_cameras": [{"name": "front_depth", "preset": "kinect_160",

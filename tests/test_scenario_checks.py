@@ -133,3 +133,19 @@ def test_a_duration_shorter_than_a_step_and_deep_pedsim_xml_are_refused(tmp_path
     with pytest.raises(ScenarioError) as info:
         load_scenario(str(path))
     assert info.value.source == str(path) and "nested more than 16 elements deep" in info.value.message
+
+
+def test_yaml_merge_keys_a_nul_byte_a_standing_circle_and_walkers_too_fast(tmp_path):
+    path = tmp_path / "merge.yaml"
+    path.write_text("base: passers_by\nwaypoints:\n  north3: {<<: {radius: 0.5}, position: [3.0, 10.0]}\n")
+    assert load_scenario(str(path))["waypoints"]["north3"]["radius"] == 0.5
+    expect(tmp_path, "base: passers_by\nname: a\0b\n", "<file>", "unacceptable character #x0000")
+    # 6 persons 1 m apart stand on a circle of 1 / (2 sin(pi / 6)) = 1 m round [3.5, 20], 1.5 m from the airport's
+    # west wall; at spacing 2.5 the circle's 2.5 m plus a body's 0.25 m reach past the wall 3.5 m away
+    load_scenario(str(_write(tmp_path, "base: airport_disembarkation\nstanding:\n  - {position: [3.5, 20], count: 6, "
+                                       "spacing: 1.0}\n")))
+    expect(tmp_path, "base: airport_disembarkation\nstanding:\n  - {position: [3.5, 20], count: 6, spacing: 3.25}\n",
+           "standing[0].position", "is too near a wall (3.50 m from a wall)", "circle of 3.25 m")
+    # an adult at most 2.0 m/s x 1.3 = 2.6 m/s, 0.104 m a step: fine; x 1000, 2,000 m/s: 80 m a step, past 0.25 m
+    expect(tmp_path, "base: passers_by\ncrowd: {max_speed_factor: 1000.0}\n", "crowd.agent_types.adult.speed_max",
+           "moves a walker 80 m in one step", "--allow-large does not pass it")
