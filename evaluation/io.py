@@ -34,6 +34,10 @@ CHUNK_ROWS = 1 << 14  # rows parsed at once (about 170 frames of the airport): a
 # INT64_MIN.
 WHOLE = frozenset({"frame", "id", "group", "track_a", "track_b", "target_track", "target_visible"})
 EXACT = 2.0 ** 53
+# columns of yes/no flags, 0 or 1 (a ground truth's visibility and range tags), and of shares in [0, 1]
+FLAGS = frozenset({"visible", "visible_seed000", "in_range", "in_view", "occluded"})
+SHARES = frozenset({"strength"})
+HEADER_MAX = 1 << 16  # characters of a header line: a longer one is no CSV of ours (a binary file, /dev/zero)
 
 
 class EvaluationInputError(Error):
@@ -42,7 +46,11 @@ class EvaluationInputError(Error):
 
 
 def _header(path: Path, f, required: tuple[str, ...]) -> list[str]:
-    header = f.readline().strip()
+    header = f.readline(HEADER_MAX)
+    if len(header) == HEADER_MAX and not header.endswith("\n"):
+        raise EvaluationInputError(f"{path}: the first line is longer than {HEADER_MAX:,} characters; expected a "
+                                   f"header row of column names")
+    header = header.strip()
     names = [c.strip() for c in header.split(",")]
     missing = [c for c in required if c not in names]
     if missing:
@@ -101,13 +109,19 @@ class _Chunk:
     def check(self, data: np.ndarray, columns: list[int]) -> None:
         """The ``columns`` (indices) of ``data`` hold finite numbers, whole and exact ones where ``WHOLE``."""
         for k in columns:
-            values, whole = data[:, k], self.names[k] in WHOLE
-            ok = (np.abs(values) < EXACT) & (values == np.round(values)) if whole else np.isfinite(values)
+            name, values = self.names[k], data[:, k]
+            if name in WHOLE:
+                ok, kind = (np.abs(values) < EXACT) & (values == np.round(values)), "whole numbers (below 2^53 in size)"
+            elif name in FLAGS:
+                ok, kind = (values == 0) | (values == 1), "0 or 1"
+            elif name in SHARES:
+                ok, kind = (values >= 0) & (values <= 1), "numbers from 0 to 1"
+            else:
+                ok, kind = np.isfinite(values), "finite numbers"
             if ok.all():
                 continue
             row = int(np.flatnonzero(~ok)[0])
             field = self.rows[row].partition("#")[0].split(",")[k].strip()
-            kind = "whole numbers (below 2^53 in size)" if whole else "finite numbers"
             raise EvaluationInputError(f"{self.path}: line {self.line(row)}, column {self.names[k]} must hold "
                                        f"{kind}, got {field!r}")
 
@@ -149,6 +163,8 @@ def table_chunks(path, required: tuple[str, ...] = REQUIRED, read: tuple[str, ..
     chunk. The ``required`` columns and those of ``read`` the file has (what the caller uses) are checked in every
     chunk as the module docstring says; other columns need only be numbers."""
     path = Path(path)
+    if path.exists() and not path.is_file():  # a folder, a device (/dev/zero reads forever), a pipe
+        raise EvaluationInputError(f"{path}: not a regular file; expected a CSV file")
     with _reading(path), open(path, encoding="utf-8-sig") as f:
         names = _header(path, f, required)
         checked = [k for k, name in enumerate(names) if name in required or name in read]

@@ -60,6 +60,12 @@ MAX_PIXELS_PER_SECOND = 100_000_000
 # their shape, and nothing indoors is this large (the longest airport terminals are 1-2 km; the airport here is 37 m).
 MAX_MAP_EXTENT = 10_000.0
 
+# wall and obstacle segments of the map. Every step costs about 28 us a segment here (seed 001's room with its two
+# wall cameras and tiny obstacles added: 77 ms a step with 3,000 segments, 339 ms with 12,000; the crowd's wall
+# forces, the scenes and the renders all go over every segment), so 10,000 segments are about 0.3 s a step, 7 s of
+# this machine per simulated second. The bundled maps have 6-40 segments; the largest PedSim file, 96.
+MAX_WALL_SEGMENTS = 10_000
+
 # cells of the map filter's occupancy grid (pipeline/map_filter.py: the map's bounding box plus a margin, at
 # map_filter.resolution). A cell costs about 50 bytes while the grid is made (the grid, its float copy and the FFT
 # convolution) and 260 ns (the airport at 0.01 m: 13.2 million cells, +657 MB, 3.6 s), so 2e7 cells are about 1 GB
@@ -342,6 +348,11 @@ def _check_walkers(scenario: dict, source: str) -> None:
 
 
 def _check_map(scenario: dict, source: str) -> None:
+    segments = len(wall_segments(scenario))
+    if segments > MAX_WALL_SEGMENTS:
+        raise ScenarioError(source, "map", f"{_n(segments)} wall and obstacle segments; expected at most "
+                                           f"{_n(MAX_WALL_SEGMENTS)} (scenarios/costs.py MAX_WALL_SEGMENTS: every step "
+                                           f"goes over every segment, about 28 us each here){ALLOW}")
     w, h = map_extent(scenario["map"])
     if max(w, h) > MAX_MAP_EXTENT:
         key = _farthest_line(scenario["map"])

@@ -305,3 +305,17 @@ def test_a_scene_holds_more_than_its_bound_when_more_are_alive():
     scene = Scene(walls, 0.4, 2, ("torso",), initial_capacity=2)
     scene.sync(np.zeros(3), np.array([1, 2, 3]), np.array([[1.0, 1.0], [2.0, 1.0], [3.0, 1.0]]))
     assert scene.capacity == 3 and scene.alive == 3
+
+
+def test_a_map_of_more_wall_segments_than_the_limit_is_refused_unless_allowed():
+    from scenarios import scenario_from_dict
+    from scenarios.costs import MAX_WALL_SEGMENTS
+    from scenarios.loader import read_raw, resolve
+
+    raw = read_raw(resolve("seed001_room_1"))
+    # each obstacle a triangle, 3 segments, in place of the room's own; its outer wall, 4 segments, besides
+    raw["map"]["obstacles"] = [[[5.0, 0.5], [5.01, 0.5], [5.01, 0.51]]] * (MAX_WALL_SEGMENTS // 3)
+    with pytest.raises(ScenarioError) as info:
+        scenario_from_dict(raw, "<many>")
+    assert info.value.key == "map" and f"{MAX_WALL_SEGMENTS // 3 * 3 + 4:,} wall and obstacle segments" in str(info.value)
+    assert scenario_from_dict(raw, "<many>", allow_large=True)["name"] == "seed001_room_1"

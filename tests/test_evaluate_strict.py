@@ -8,7 +8,7 @@ import pytest
 
 from crowdsim.cli import main
 from evaluation.group_score import score_groups
-from evaluation.io import EvaluationInputError, read_table, read_text, sequence_chunks
+from evaluation.io import EvaluationInputError, read_table, read_text, sequence_chunks, table_chunks
 from evaluation.navigation import read_nav_run
 from evaluation.stream import CsvPair
 from test_cli import one_error_line
@@ -71,7 +71,7 @@ def test_the_ground_truths_range_and_visibility_are_checked_where_read(tmp_path)
     assert error_of(lambda: list(sequence_chunks(gt, max_range=12.0))) == \
         f"{gt}: line 2, column range must hold finite numbers, got 'nan'"
     assert error_of(lambda: list(sequence_chunks(gt))) == \
-        f"{gt}: line 3, column visible must hold finite numbers, got 'nan'"
+        f"{gt}: line 3, column visible must hold 0 or 1, got 'nan'"
     # without --max-range the range is not read, with --no-occlusion the visibility is not
     assert [len(s) for s in sequence_chunks(gt, occlusion=False)] == [2]
 
@@ -81,7 +81,7 @@ def test_relations_and_groups_are_checked_too(tmp_path):
     groups = write(tmp_path / "groups.csv", GROUPS)
     relations = write(tmp_path / "relations.csv", RELATIONS.replace("0.25", "nan"))
     assert error_of(lambda: score_groups(gt, tracks, relations, groups)) == \
-        f"{relations}: line 2, column strength must hold finite numbers, got 'nan'"
+        f"{relations}: line 2, column strength must hold numbers from 0 to 1, got 'nan'"
     relations = write(tmp_path / "relations.csv", RELATIONS.replace(",8,", ",1e20,"))
     assert error_of(lambda: score_groups(gt, tracks, relations, groups)).startswith(
         f"{relations}: line 2, column track_b must hold whole numbers")
@@ -155,7 +155,7 @@ def test_nan_relation_strength_through_the_command_line(tmp_path, capsys):
     relations = write(tmp_path / "relations.csv", RELATIONS.replace("0.25", "nan"))
     line = evaluate_fails(capsys, tmp_path, "--gt", gt, "--tracks", tracks, "--relations", relations,
                           "--groups", write(tmp_path / "groups.csv", GROUPS))
-    assert line == f"crowdsim: error: {relations}: line 2, column strength must hold finite numbers, got 'nan'"
+    assert line == f"crowdsim: error: {relations}: line 2, column strength must hold numbers from 0 to 1, got 'nan'"
 
 
 def test_a_ground_truth_without_visible_is_refused_saying_how_to_score_it(tmp_path, capsys):
@@ -211,3 +211,17 @@ def test_small_text_files_are_read_as_the_csvs(tmp_path):
         f"{bad}: line 2 is not UTF-8 text (byte 0xe9, 6 bytes into the line); expected a file saved as UTF-8"
     assert error_of(lambda: read_text(tmp_path / "nope.json")) == \
         f"{tmp_path / 'nope.json'}: cannot be read (No such file or directory)"
+
+
+def test_flags_shares_and_files_that_are_no_csv(tmp_path):
+    gt = tmp_path / "gt.csv"
+    gt.write_text("frame,t,id,x,y,visible\n0,0.00,1,2.0,0.0,1\n1,0.04,1,2.1,0.0,2\n")
+    with pytest.raises(EvaluationInputError, match=r"gt.csv: line 3, column visible must hold 0 or 1, got '2'"):
+        list(table_chunks(gt, read=("visible",)))
+    relations = tmp_path / "relations.csv"
+    relations.write_text("frame,t,track_a,track_b,strength\n1,0.04,7,8,1.5\n")
+    with pytest.raises(EvaluationInputError, match=r"line 2, column strength must hold numbers from 0 to 1, got '1.5'"):
+        list(table_chunks(relations, ("frame", "track_a", "track_b", "strength")))
+    for path in ("/dev/zero", str(tmp_path)):
+        with pytest.raises(EvaluationInputError, match="not a regular file"):
+            list(table_chunks(path))
