@@ -33,11 +33,12 @@ def _where_made(path: Path, flag: str) -> Path:
     """The nearest folder above ``path`` that exists, once ``path`` is known to have a legal name and to need no
     file to hold a folder; RunDirError naming ``flag`` otherwise."""
     text = str(path)
+    shown = text if len(text) <= 80 else text[:80] + "..."
     if "\0" in text or len(os.fsencode(text)) > PATH_MAX:
-        raise RunDirError(f"{flag} {text[:80]}...: not a legal path; expected at most {PATH_MAX} bytes, no NUL")
+        raise RunDirError(f"{flag} {shown!r}: not a legal path; expected at most {PATH_MAX} bytes, no NUL")
     long = [part for part in path.parts if len(os.fsencode(part)) > NAME_MAX]
     if long:
-        raise RunDirError(f"{flag} {text[:80]}...: a name of {len(os.fsencode(long[0]))} bytes; expected at most "
+        raise RunDirError(f"{flag} {shown}: a name of {len(os.fsencode(long[0]))} bytes; expected at most "
                           f"{NAME_MAX} bytes for each name in the path")
     for above in path.absolute().parents:
         if above.exists():
