@@ -244,8 +244,8 @@ def sequence_chunks(path, occlusion: bool = True, visible_column: str | None = N
     ignored = Ignored(occlusion, visible_column, max_range)
     held = None
     for table in table_chunks(path, read=("t", *ignored.columns), chunk_rows=chunk_rows):
-        rows = {"frame": table["frame"].astype(np.int64), "id": table["id"].astype(np.int64), "x": table["x"], "y": table["y"],
-                "ignore": ignored(table, path)}
+        rows = {"frame": table["frame"].astype(np.int64), "id": table["id"].astype(np.int64), "x": table["x"],
+                "y": table["y"], "ignore": ignored(table, path)}
         if "t" in table:
             rows["t"] = table["t"]
         if held is not None:

@@ -8,6 +8,7 @@ each built-in type's parameters under the same names; a test keeps the two regis
 
 from __future__ import annotations
 
+import math
 import traceback
 from dataclasses import dataclass
 from typing import Protocol, Sequence
@@ -96,13 +97,22 @@ def _detections(out) -> bool:
         isinstance(k, str) and isinstance(v, DetectedPersons) for k, v in out.items()))
 
 
+def _command(out) -> bool:
+    try:
+        return len(out) == 2 and all(math.isfinite(float(c)) for c in out)
+    except (TypeError, ValueError, OverflowError):
+        return False
+
+
 # what each role's method must return: (method, test, what to say was expected)
 RETURNS = {
-    "detector": ("detect", _detections, "DetectedPersons, or a dict of named DetectedPersons batches"),
-    "fusion": ("fuse", lambda out: isinstance(out, DetectedPersons), "DetectedPersons"),
-    "tracker": ("update", lambda out: isinstance(out, TrackedPersons), "TrackedPersons"),
+    "detector": ("detect", _detections,
+                 "DetectedPersons, or a dict of named DetectedPersons batches (pipeline.types)"),
+    "fusion": ("fuse", lambda out: isinstance(out, DetectedPersons), "DetectedPersons (pipeline.types)"),
+    "tracker": ("update", lambda out: isinstance(out, TrackedPersons), "TrackedPersons (pipeline.types)"),
     "groups": ("update", lambda out: isinstance(out, tuple) and len(out) == 2 and isinstance(out[0], SocialRelations)
-               and isinstance(out[1], TrackedGroups), "a tuple (SocialRelations, TrackedGroups)"),
+               and isinstance(out[1], TrackedGroups), "a tuple (SocialRelations, TrackedGroups) (pipeline.types)"),
+    "planner": ("command", lambda out: _command(out), "(v, omega), two finite numbers in m/s and rad/s"),
 }
 
 
@@ -131,8 +141,7 @@ def check_outputs(part, role: str, source: str, key: str):
         except Exception as e:  # the user's code failed: one error naming the part and where, not our traceback
             raise user_failure(e, f"{name} raised", source, f"{key}.type") from None
         if not test(out):
-            raise ScenarioError(source, f"{key}.type", f"{name} returned {type(out).__name__}; expected {expected} "
-                                                       "(pipeline.types)")
+            raise ScenarioError(source, f"{key}.type", f"{name} returned {type(out).__name__}; expected {expected}")
         return out
 
     try:

@@ -33,14 +33,16 @@ def test_another_planner_type_replaces_the_base_planner(tmp_path):
 
 
 def test_another_tracker_type_replaces_the_base_tracker(tmp_path):
-    sc = load_scenario(str(write(tmp_path, "mht.yaml", "base: airport_disembarkation\npipeline:\n  tracker: {type: mht}\n")))
+    text = "base: airport_disembarkation\npipeline:\n  tracker: {type: mht}\n"
+    sc = load_scenario(str(write(tmp_path, "mht.yaml", text)))
     assert sc["pipeline"]["tracker"]["type"] == "mht" and sc["pipeline"]["tracker"]["n_scan"] == 30
     assert "initiation" not in sc["pipeline"]["tracker"]
 
 
 def test_the_same_type_still_merges_key_by_key(tmp_path):
     base = load_scenario("airport_disembarkation")["pipeline"]["tracker"]
-    sc = load_scenario(str(write(tmp_path, "g.yaml", "base: airport_disembarkation\npipeline:\n  tracker: {gate_chi2: 9.21}\n")))
+    text = "base: airport_disembarkation\npipeline:\n  tracker: {gate_chi2: 9.21}\n"
+    sc = load_scenario(str(write(tmp_path, "g.yaml", text)))
     assert sc["pipeline"]["tracker"] == {**base, "gate_chi2": 9.21}
 
 
@@ -113,7 +115,8 @@ def test_a_user_tracker_returning_none_is_one_error_naming_it(tmp_path, monkeypa
     (tmp_path / "none_trackers.py").write_text("class Nothing:\n    def update(self, stamp, detections):\n"
                                                "        return None\n    def reset(self):\n        pass\n")
     monkeypatch.syspath_prepend(str(tmp_path))
-    path = write(tmp_path, "none.yaml", "base: passers_by\nwarmup: 0\npipeline:\n  tracker: {type: none_trackers:Nothing}\n")
+    path = write(tmp_path, "none.yaml",
+                 "base: passers_by\nwarmup: 0\npipeline:\n  tracker: {type: none_trackers:Nothing}\n")
     assert main(["run", str(path), "--duration", "1", "--quiet", "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"crowdsim: error: {path}: pipeline.tracker.type: none_trackers:Nothing.update returned NoneType; "
@@ -138,3 +141,15 @@ def test_a_user_part_that_raises_is_one_error_naming_it_and_its_line(tmp_path, m
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith(f"crowdsim: error: {path}: pipeline.tracker.type: {said}; "), err
         assert not (tmp_path / "out").exists()
+
+
+def test_a_user_planner_whose_command_is_no_pair_of_numbers_is_one_error(tmp_path, monkeypatch, capsys):
+    (tmp_path / "lost_planners.py").write_text(
+        "class Lost:\n    def command(self, stamp, pose, velocity, obstacles, tracks, goal):\n        return None\n"
+        "    def reset(self):\n        pass\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    path = write(tmp_path, "lost.yaml", "base: passers_by\nwarmup: 0\nrobot:\n  planner: {type: lost_planners:Lost}\n")
+    assert main(["run", str(path), "--duration", "1", "--quiet", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"crowdsim: error: {path}: robot.planner.type: lost_planners:Lost.command returned NoneType; "
+                   "expected (v, omega), two finite numbers in m/s and rad/s"]

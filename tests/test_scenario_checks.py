@@ -68,8 +68,8 @@ def test_a_utf8_bom_is_read(tmp_path):
      ["expected below v_max"]),
     ("base: seed001_room_1\npipeline:\n  tracker: {move_probabilities: [0.5, 0.5, 0.5, 0.5]}\n",
      "pipeline.tracker.move_probabilities", ["summing to 1"]),
-    ("base: ktp_group\nsensors:\n  depth_cameras:\n    - {name: kinect, preset: kinect_160, position: [0.0, 0.33, 1.1], "
-     "yaw: 1.5707963, rate: 30.0}\n", "sensors.depth_cameras[0].rgb",
+    ("base: ktp_group\nsensors:\n  depth_cameras:\n    - {name: kinect, preset: kinect_160, "
+     "position: [0.0, 0.33, 1.1], yaw: 1.5707963, rate: 30.0}\n", "sensors.depth_cameras[0].rgb",
      ["pipeline.detectors.kinect (rgbd_people) needs this camera's colour images", "hog: false"]),
     ("base: seed001_room_1\nsensors:\n  wall_cameras:\n    - {name: 'cam \"east\"', position: [5.0, 4.0, 2.6], "
      "rate: 5.0}\n", "sensors.wall_cameras[0].name", ["letters, digits"]),
@@ -105,7 +105,8 @@ def test_places_outside_the_map_are_refused(tmp_path):
     expect(tmp_path, "base: seed001_room_1\nclusters:\n  - {position: [2.5, 1.4], route: diagonal_up, count: 10, "
                      "spread: [200.0, 200.0]}\n", "clusters[0].spread",
            "a corner of the cluster's start area [-97.5, -98.6] lies outside the map", "inside the outer wall")
-    expect(tmp_path, "base: seed001_room_1\nsensors:\n  wall_cameras:\n    - {name: camera_1, position: [9.8, 0.2, 2.6]}\n"
+    expect(tmp_path, "base: seed001_room_1\nsensors:\n  wall_cameras:\n"
+                     "    - {name: camera_1, position: [9.8, 0.2, 2.6]}\n"
                      "    - {name: camera_2, position: [50.0, 4.0, 2.6]}\n",
            "sensors.wall_cameras[1].position", "wall camera [50, 4] lies outside the map")
 

@@ -25,7 +25,7 @@ import numbers
 
 import numpy as np
 
-from pipeline.assemble import make_user_part
+from pipeline.assemble import check_outputs, make_user_part
 from pipeline.frames import inverse, transform_points
 from pipeline.types import TrackedPersons
 
@@ -329,9 +329,10 @@ ROBOT_KEYS = ("radius", "max_speed", "max_angular_speed", "max_acceleration")
 def build_planner(spec: dict, robot: dict, source: str = "<scenario>") -> Planner:
     """The planner a validated ``robot.planner`` section names (``type`` and its keys): a built-in type, given the
     robot's radius, speed limits and acceleration (``robot``: the scenario's ``robot`` section) besides its keys, or
-    a class of one's own, made as ``Class(**keys)`` like the pipeline's parts (pipeline/assemble.py; what its
-    constructor raises is one error naming ``source``'s key)."""
+    a class of one's own, made as ``Class(**keys)`` like the pipeline's parts (pipeline/assemble.py: what its
+    constructor raises, and a command that is no (v, omega), are one error naming ``source``'s key)."""
     params = {key: value for key, value in spec.items() if key != "type"}
     if spec["type"] in PLANNERS:
         return PLANNERS[spec["type"]]({**{key: robot[key] for key in ROBOT_KEYS}, **params})
-    return make_user_part(spec["type"], params, source, "robot.planner")
+    return check_outputs(make_user_part(spec["type"], params, source, "robot.planner"), "planner", source,
+                         "robot.planner")
