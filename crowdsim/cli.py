@@ -1,5 +1,5 @@
 """The ``crowdsim`` command: run, evaluate, evaluate-nav, navigate, report, scenarios, validate-scenario, validate,
-scenario-keys, bench."""
+scenario-keys, bench, experiment, dataset."""
 
 from __future__ import annotations
 
@@ -10,6 +10,8 @@ import re
 import sys
 import time
 import warnings
+from dataclasses import dataclass
+from importlib import import_module
 from pathlib import Path
 
 from .errors import Error
@@ -41,7 +43,7 @@ def _cmd_run(args) -> int:
     from .run import cameras_line, navigation_tables, run, summary_table
 
     scenario = _load(args, args.scenario, seed=args.seed, duration=args.duration)
-    out = _run_dir(args, scenario["name"])
+    out = run_dir(args, scenario["name"])
     metrics = run(scenario, out, rrd=args.rrd, progress=not args.quiet)
     print(summary_table(metrics))
     if "navigation" in metrics:
@@ -71,7 +73,7 @@ def _cmd_evaluate(args) -> int:
 
     from .outdir import check_out_dir, write_directory, write_file
 
-    _check_json(args)
+    check_json(args)
     if args.motchallenge is not None:
         check_out_dir(args.motchallenge, "--motchallenge")  # as given: "" is refused, not ignored
     if args.visible_column is not None and not args.visible_column.strip():
@@ -144,7 +146,7 @@ def _cmd_evaluate(args) -> int:
 def _cmd_evaluate_nav(args) -> int:
     from evaluation.navigation_report import evaluate_nav_main
 
-    _check_json(args)
+    check_json(args)
     print(evaluate_nav_main([Path(d) for d in args.run_dirs], Path(args.json) if args.json else None))
     return 0
 
@@ -152,9 +154,8 @@ def _cmd_evaluate_nav(args) -> int:
 def _cmd_navigate(args) -> int:
     from .navigate import navigate_main
 
-    _check_json(args)
-    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
-        raise UsageError(f"--duration {args.duration}: expected a time above 0 s")
+    check_json(args)
+    check_duration(args)
     scenario = _load(args, args.scenario)
     print(navigate_main(scenario, args.planner, args.first_seed, args.seeds, args.duration,
                         Path(args.json) if args.json else None, workers=args.workers, progress=not args.quiet))
@@ -216,7 +217,7 @@ def _cmd_validate(args) -> int:
     from .crowd.validation import run_validation
     from .outdir import write_directory
 
-    out = _run_dir(args, "validation")
+    out = run_dir(args, "validation")
     results = write_directory(out, lambda tmp: run_validation(tmp, quick=args.quick, progress=True))
     for check in results["checks"]:
         print(f"{'pass' if check['passed'] else 'FAIL'}  {check['name']}")
@@ -225,148 +226,7 @@ def _cmd_validate(args) -> int:
     return 0
 
 
-def _cmd_bench(args) -> int:
-    _check_json(args)
-    if args.what == "sim":
-        from .bench.sim import run_sim_benchmark
-
-        run_sim_benchmark(quick=args.quick, json_path=args.json)
-    elif args.what == "eval":
-        from .bench.eval import run_eval_benchmark
-
-        run_eval_benchmark(json_path=args.json, quick=args.quick)
-    elif args.what == "env":
-        from .bench.env import run_env_benchmark
-
-        if args.socnavgym and not args.socnavgym_config:
-            raise UsageError("--socnavgym: expected --socnavgym-config too (one of SocNavGym's environment configs)")
-        run_env_benchmark(json_path=args.json, quick=args.quick, crowdnav=args.crowdnav,
-                          crowdnav_dir=args.crowdnav_dir, socnavgym=args.socnavgym,
-                          socnavgym_config=args.socnavgym_config)
-    elif args.what == "dataset":
-        from .bench.dataset import run_dataset_benchmark
-
-        run_dataset_benchmark(json_path=args.json, quick=args.quick)
-    elif args.what == "sensors":
-        from .bench.sensors import run_sensor_benchmarks
-
-        run_sensor_benchmarks(json_path=args.json, quick=args.quick)
-    else:
-        from .bench.parts import run_benchmarks
-
-        run_benchmarks(json_path=args.json, quick=args.quick)
-    return 0
-
-
-# --seeds left out: how many each experiment takes
-DEFAULT_SEEDS = {"train-detector": 20, "table2": 20, "train-relations": 20, "groups": 5, "train-hog": 10,
-                 "seed003": 1}
-
-
-def _cmd_experiment(args) -> int:
-    from .outdir import write_directory
-
-    if args.seeds is None:
-        args.seeds = DEFAULT_SEEDS.get(args.what)
-    if args.what == "train-detector":
-        return _cmd_train_detector(args)
-    if args.what == "train-relations":
-        return _cmd_train_relations(args)
-    if args.what == "train-hog":
-        return _cmd_train_hog(args)
-    if args.what == "groups":
-        from .experiments.groups import held_out_seeds, run, write
-
-        if args.seeds < 1 or args.workers < 1:
-            raise UsageError(f"--seeds and --workers: expected at least 1, got {args.seeds} and {args.workers}")
-        seeds = held_out_seeds(args.seeds)
-        out = _run_dir(args, "groups")
-        results = run(seeds, args.duration or 60.0, workers=args.workers)
-        print(write_directory(out, lambda tmp: write(tmp, results, seeds)))
-        print(f"\n{out / 'groups.md'}, groups.json, groups.png")
-        return 0
-    if args.what == "hog-vs-opencv":
-        try:
-            import cv2  # noqa: F401
-        except ImportError:
-            raise UsageError('experiment hog-vs-opencv: needs OpenCV: pip install -e ".[compare]"') from None
-        from .experiments.train_hog import compare_opencv
-
-        r = compare_opencv(workers=args.workers)
-        print(f"HOG person detectors on held-out seeds {r['test_seeds']} ({r['images']} images, "
-              f"{r['ours_peak']['persons']} persons), a detection right at IoU 0.5:\n")
-        print("| detector | F1 | precision | recall |\n|---|---|---|---|")
-        for label, key in (("ours, at its threshold (validation seeds)", "ours_at_threshold"),
-                           ("ours, at its best threshold here", "ours_peak"),
-                           ("OpenCV's INRIA-trained, at its best threshold here", "opencv_peak")):
-            print(f"| {label} | {r[key]['f1']:.3f} | {r[key]['precision']:.3f} | {r[key]['recall']:.3f} |")
-        return 0
-    if args.what == "seed001":
-        from .experiments.seed001 import experiment, write
-
-        if args.runs < 1 or args.workers < 1:
-            raise UsageError(f"--runs and --workers: expected at least 1, got {args.runs} and {args.workers}")
-        out = _run_dir(args, "seed001")
-        if args.tune:
-            from .experiments.seed001 import tune, write_tuning
-
-            print(write_directory(out, lambda tmp: write_tuning(tmp, tune(workers=args.workers))))
-            return 0
-        results = experiment(args.runs, workers=args.workers)
-        print(write_directory(out, lambda tmp: write(tmp, results)))
-        print(f"\n{out / 'seed001.md'}, seed001.json, seed001.png")
-        return 0
-    if args.what == "seed003":
-        from .experiments.seed003 import experiment, write
-
-        if args.seeds < 1 or args.workers < 1:
-            raise UsageError(f"--seeds and --workers: expected at least 1, got {args.seeds} and {args.workers}")
-        out = _run_dir(args, "seed003")
-        results = experiment(args.seeds, workers=args.workers, preset=args.preset)
-        print(write_directory(out, lambda tmp: write(tmp, results)))
-        print(f"\n{out / 'seed003.md'}, seed003.json, seed003.png")
-        return 0
-    if args.what == "table2":
-        from .experiments.table2 import table2, write
-
-        if args.seeds < 1:
-            raise UsageError(f"--seeds: expected at least 1, got {args.seeds}")
-        seeds = list(range(1, args.seeds + 1))
-        out = _run_dir(args, "table2")
-        figures = table2(seeds, args.duration, workers=args.workers)
-        print(write_directory(out, lambda tmp: write(tmp, figures, seeds)))
-        print(f"\n{out / 'table2.md'}, table2.json, table2.png")
-        return 0
-    if args.what == "tune":
-        try:
-            from .experiments.tune import tune
-        except ImportError as e:
-            raise UsageError(f"experiment tune: needs {e.name}: pip install -e \".[tune]\"") from None
-        out = _run_dir(args, "tune")
-        r = write_directory(out, lambda tmp: tune(tmp, args.trials, args.storage, duration=args.duration or 60.0,
-                                                  seed=args.seed))
-        print(f"{r['trials']} trials; best MOTA {r['best_train_mota']:.1f}% on the training seeds; held out: "
-              f"{r['held_out_mota_best']:.1f}% against the airport's own {r['held_out_mota_airport']:.1f}%; "
-              f"{out / 'best.yaml'}")
-        return 0
-    if args.minutes <= 0:
-        raise UsageError(f"--minutes: expected a time above 0, got {args.minutes}")
-    out = _run_dir(args, "ppo")
-    from .experiments.ppo import run_ppo
-
-    r = write_directory(out, lambda tmp: run_ppo(tmp, args.minutes, envs=args.envs, people=args.people,
-                                                 seed=args.seed, eval_episodes=args.eval_episodes))
-    print(f"PPO: {r['steps']:,} steps in {r['train_wall_s'] / 60:.1f} min ({r['steps_per_s']:.0f}/s), "
-          f"{r['training_episodes']} training episodes")
-    for name in ("ppo", "random"):
-        e = r[name]
-        print(f"{name:7s} on {e['episodes']} evaluation seeds: success {e['success_rate']:.0%}, collision "
-              f"{e['collision_rate']:.0%}, timeout {e['timeout_rate']:.0%}, mean return {e['mean_return']:.2f}")
-    print(f"learning curve: {out / 'learning_curve.png'}")
-    return 0
-
-
-def _run_dir(args, name: str) -> Path:
+def run_dir(args, name: str) -> Path:
     """A command's output folder: ``--out``, or runs/<name>-<time> (the name made one safe file name); checked
     before any work to be a new or empty folder this user can make."""
     from .outdir import check_out_dir
@@ -379,7 +239,7 @@ def _run_dir(args, name: str) -> Path:
     return out
 
 
-def _check_json(args) -> None:
+def check_json(args) -> None:
     """``--json``, when given, can take a new file: checked before any work."""
     from .outdir import check_out_file
 
@@ -387,105 +247,15 @@ def _check_json(args) -> None:
         check_out_file(Path(args.json), "--json")
 
 
-def _training_out(args) -> Path | None:
-    """A training command's ``--out`` (None: the shipped models' folder), checked to be new or empty, once
-    scikit-learn is known to be there."""
-    from .outdir import check_out_dir
-
-    out = None
-    if args.out is not None:  # "" is refused, not taken for the shipped models' folder
-        check_out_dir(args.out)
-        out = Path(args.out)
-    try:
-        import sklearn  # noqa: F401
-    except ImportError:
-        raise UsageError(f'experiment {args.what} needs scikit-learn, of the train extra: '
-                         'pip install -e ".[train]"') from None
-    return out
+def check_duration(args) -> None:
+    """``--duration``, when given, is a time above 0 s."""
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise UsageError(f"--duration {args.duration}: expected a time above 0 s")
 
 
-def _saved(models, save_models, out: Path | None, models_dir: Path) -> list[Path]:
-    """``save_models`` into the shipped models' folder, or into ``out`` whole (written beside, then moved)."""
-    from .outdir import write_directory
-
-    if out is None:
-        return save_models(models, models_dir)
-    return [out / p.name for p in write_directory(out, lambda tmp: save_models(models, tmp))]
-
-
-def _cmd_train_detector(args) -> int:
-    if not 1 <= args.seeds <= 1000:
-        raise UsageError(f"--seeds: expected 1 to 1000 training seeds, got {args.seeds}")
-    if args.workers < 1:
-        raise UsageError(f"--workers: expected at least 1 process, got {args.workers}")
-    out = _training_out(args)
-    from pipeline.detectors.learned_segments import MODELS_DIR
-
-    from .experiments.train_detector import save_models, train
-
-    t0 = time.perf_counter()
-    models, report = train(args.seeds, quick=args.quick, workers=args.workers)
-    paths = _saved(models, save_models, out, MODELS_DIR)
-    print(report)
-    print(f"{time.perf_counter() - t0:.0f} s; models: " + _sizes(paths))
-    return 0
-
-
-def _training_seeds_out(args, most: int, first: int) -> Path | None:
-    """``_training_out`` after checking --seeds (1 to ``most`` training seeds from ``first``) and --workers."""
-    if not 1 <= args.seeds <= most or args.workers < 1:
-        raise UsageError(f"--seeds: expected 1 to {most} training seeds (from {first}), and --workers at least 1; "
-                         f"got {args.seeds} and {args.workers}")
-    return _training_out(args)
-
-
-def _sizes(paths: list[Path]) -> str:
-    return ", ".join(f"{p} ({p.stat().st_size / 1024:.0f} KiB)" for p in paths)
-
-
-def _cmd_train_relations(args) -> int:
-    out = _training_seeds_out(args, 20, 1100)
-    from pipeline.groups.relations import MODELS_DIR
-
-    from .experiments.relations import save_models, train
-
-    t0 = time.perf_counter()
-    models = train(args.seeds, args.duration or 60.0, workers=args.workers)
-    paths = _saved(models, save_models, out, MODELS_DIR)
-    info = next(iter(models.values()))[1]
-    print(f"{info['pairs']} pairs of tracks ({info['related']} related) from seeds {info['train_seeds'][0]}-"
-          f"{info['train_seeds'][1]}; {time.perf_counter() - t0:.0f} s; models: " + _sizes(paths))
-    return 0
-
-
-def _cmd_train_hog(args) -> int:
-    from .experiments.train_hog import DURATION, MODELS_DIR, save
-
-    if args.camera == "robot":
-        from pipeline.detectors.hog import ROBOT_MODEL_FILE
-
-        from .experiments.train_hog_robot import train
-        out = _training_seeds_out(args, 100, 5100)
-    else:
-        from .experiments.train_hog import train
-        out = _training_seeds_out(args, 100, 4100)
-    t0 = time.perf_counter()
-    model, info = train(args.seeds, args.workers, args.duration or DURATION)
-    name = ROBOT_MODEL_FILE if args.camera == "robot" else None
-    paths = _saved((model, info), lambda m, where: [save(*m, where, *([name] if name else []))], out, MODELS_DIR)
-    v = info["validation"]
-    print(f"{info['positives']} person windows, {info['negatives']} random and {info['hard_negatives']} hard "
-          f"negatives from seeds {info['train_seeds'][0]}-{info['train_seeds'][1]}; ", end="")
-    if args.camera == "robot":
-        print(f"threshold {model.threshold:.3f} ({info['threshold_recall']:.0%} of the {v['candidates_on_persons']} "
-              f"validation candidates on persons pass, {v['false_above_threshold']:.1%} of the "
-              f"{v['candidates_on_no_one']} on no one), track start {info['start_confidence']:.3f} "
-              f"({info['start_recall']:.0%} pass, {v['false_above_start']:.1%}); ", end="")
-    else:
-        print(f"validation (IoU 0.5): F1 {v['f1']:.3f}, precision {v['precision']:.3f}, recall {v['recall']:.3f} at "
-              f"score {model.threshold:.3f}; ", end="")
-    print(f"{time.perf_counter() - t0:.0f} s; model: " + _sizes(paths))
-    return 0
+def add_out_argument(parser: argparse.ArgumentParser, name: str) -> None:
+    """``--out`` of a command whose folder ``run_dir(args, name)`` makes."""
+    parser.add_argument("--out", help=f"output directory (default runs/{name}-<time>); must be new or empty")
 
 
 def _cmd_dataset_generate(args) -> int:
@@ -529,7 +299,7 @@ def _cmd_dataset_evaluate_detector(args) -> int:
     from .datasets.detection_eval import detection_table, evaluate_detector
     from .outdir import write_file
 
-    _check_json(args)
+    check_json(args)
     result = evaluate_detector(Path(args.folder), args.detector, args.split, min_beams=args.min_beams)
     print(detection_table([result]))
     if args.json:
@@ -537,15 +307,69 @@ def _cmd_dataset_evaluate_detector(args) -> int:
     return 0
 
 
+@dataclass(frozen=True)
+class Command:
+    """A registered subcommand (an experiment, a benchmark): its name, one line of help, and the module whose
+    ``add_arguments(parser)`` declares its own flags and whose ``main(args) -> int`` runs it (``arguments`` and
+    ``main`` name other functions of it). The module is imported only when the subcommand is chosen: importing every
+    experiment would cost each ``crowdsim`` command seconds."""
+
+    name: str
+    help: str
+    module: str
+    arguments: str = "add_arguments"
+    main: str = "main"
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with the command's one-line errors: ``crowdsim: error: COMMAND: what was wrong`` and a pointer to
-    the help, not a usage block (its subcommands' parsers are made of this class too)."""
+    the help, not a usage block (its subcommands' parsers are made of this class too). ``default_command``: the
+    subcommand that arguments starting with a flag, or none, are given to (``crowdsim bench [--json F]`` is
+    ``crowdsim bench loop [--json F]``)."""
+
+    default_command: str | None = None
 
     def error(self, message: str):
         self.exit(2, f"crowdsim: error: {self.prog}: {message} (see `{self.prog} --help`)\n")
 
+    def parse_known_args(self, args=None, namespace=None):
+        if self.default_command is not None and args is not None and (
+                not args or args[0].startswith("-") and args[0] not in ("-h", "--help")):
+            args = [self.default_command, *args]
+        return super().parse_known_args(args, namespace)
+
+
+class _CommandParser(_Parser):
+    """The parser of a registered ``Command``: its flags declared by its module on first use (a parse, its help)."""
+
+    def __init__(self, *args, command: Command, **kwargs):
+        super().__init__(*args, description=command.help, **kwargs)
+        self.command = command
+        self.declared = False
+
+    def parse_known_args(self, args=None, namespace=None):
+        if not self.declared:
+            module = import_module(self.command.module)
+            getattr(module, self.command.arguments)(self)
+            self.set_defaults(func=getattr(module, self.command.main))
+            self.declared = True
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras:  # named here, not by `crowdsim`: the flag is another experiment's, or none's
+            self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return namespace, extras
+
+
+def _add_commands(parser: _Parser, commands, title: str) -> None:
+    """``parser``'s subcommands (``args.what``): one per registered ``Command``."""
+    sub = parser.add_subparsers(dest="what", metavar=title, required=True, parser_class=_CommandParser)
+    for command in commands:
+        sub.add_parser(command.name, help=command.help, command=command)
+
 
 def build_parser() -> argparse.ArgumentParser:
+    from .bench import BENCHMARKS
+    from .experiments import EXPERIMENTS
+
     parser = _Parser(prog="crowdsim", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("run", help="simulate a scenario, track, score, and write a run directory")
@@ -629,74 +453,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_scenario_keys)
     p = sub.add_parser("bench", help="measure the crowd, the lasers, the trackers, the group stage and the loop; "
                                      "`bench sim`: the crowd against JuPedSim; `bench sensors`: every sensor; "
-                                     "`bench eval`: the evaluation; `bench env`: the gym environments; `bench dataset`: "
-                                     "dataset generation")
-    p.add_argument("what", nargs="?", choices=("loop", "sim", "sensors", "eval", "env", "dataset"),
-                   default="loop",
-                   help="loop (default): every part and the airport loop; sim: the crowd simulator at 100, 1000 "
-                        "and 5000 agents side by side with JuPedSim's social force model; sensors: each sensor's "
-                        "cost with 100 and 500 people, batched rays, and the robot's sensor mix against real time; "
-                        "eval: the evaluation's frames/s on 5000 frames of 80 persons; env: environment steps/s, "
-                        "one env and the vector envs; dataset: a dataset episode's frames/s and bytes per frame")
-    p.add_argument("--json", help="also write the figures to this JSON file")
-    p.add_argument("--quick", action="store_true", help="shorter measurements (for a smoke test)")
-    p.add_argument("--crowdnav", metavar="PYTHON", help="bench env: also time CrowdNav with this interpreter")
-    p.add_argument("--crowdnav-dir", metavar="DIR", help="bench env: CrowdNav's checkout, if not installed")
-    p.add_argument("--socnavgym", metavar="PYTHON", help="bench env: also time SocNavGym with this interpreter")
-    p.add_argument("--socnavgym-config", metavar="FILE", help="bench env: the SocNavGym environment config to use")
-    p.set_defaults(func=_cmd_bench)
+                                     "`bench eval`: the evaluation; `bench env`: the gym environments; "
+                                     "`bench dataset`: dataset generation")
+    p.default_command = "loop"
+    _add_commands(p, BENCHMARKS, "BENCHMARK")
     p = sub.add_parser("experiment", help="experiments that take long: `experiment ppo` trains PPO on Navigate-v0, "
                                           "`experiment train-detector` the laser_learned segment classifiers, "
                                           "`experiment train-relations` the group stage's relation classifiers")
-    p.add_argument("what", choices=("ppo", "train-detector", "table2", "tune", "train-relations", "groups",
-                                     "train-hog", "seed001", "hog-vs-opencv", "seed003"),
-                   help="ppo: stable-baselines3 PPO on crowdsim/Navigate-v0 with the tracks observation, against "
-                        "the random policy (needs [rl]); train-detector: AdaBoost and random-forest segment "
-                        "classifiers on labelled airport scans, scored against laser_segments on held-out seeds "
-                        "(needs [train]); table2: seed 000's Table II on the airport over --seeds seeds (from 1), "
-                        "its claims checked; tune: Optuna over the pipeline's parameters for MOTA (needs [tune]); "
-                        "train-relations: the svm and forest relation classifiers on tracker output of airport seeds "
-                        "1100-1119 (needs [train]); groups: the group stage on held-out airport seeds (from 1200): "
-                        "each classifier against SPENCER's, each linkage, thresholds, tracker against true tracks; "
-                        "train-hog: the wall cameras' HOG person detector on rendered images of seed 001's room "
-                        "(needs [train]); seed001: seed 001's Tables 2-6, its RJMCMC filter over the laser and the "
-                        "wall cameras in four modes on sequences I-III, its claims checked; hog-vs-opencv: our HOG "
-                        "model against OpenCV's INRIA-trained one on held-out images (needs [compare]); seed003: "
-                        "seed 003's Tables 2-5, its RGB-D detector and tracker on the KTP-like room's five "
-                        "situations under four robot motions, in five variants, its claims checked")
-    p.add_argument("--minutes", type=float, default=30.0, help="wall-clock training budget (default 30)")
-    p.add_argument("--envs", type=int, default=8, help="environments stepped together (default 8)")
-    p.add_argument("--people", type=int, default=10, help="people per environment (default 10)")
-    p.add_argument("--seed", type=int, default=0, help="training seed (evaluation seeds are disjoint)")
-    p.add_argument("--eval-episodes", type=int, default=100, help="evaluation episodes per policy (default 100)")
-    p.add_argument("--out", help="output directory (default runs/<what>-<time>; train-detector, train-relations and "
-                                 "train-hog: the shipped models, pipeline/detectors/models/ or "
-                                 "pipeline/groups/models/, replaced); must be new or empty")
-    p.add_argument("--camera", choices=("wall", "robot"), default="wall",
-                   help="train-hog: the wall cameras' model (seed 001's room) or the robot depth camera's (seed 003's "
-                        "KTP room, training seeds from 5100)")
-    p.add_argument("--seeds", type=int, help="train-detector: training seeds, from 1000 (default 20); table2: seeds "
-                                             "from 1 (default 20); train-relations: training seeds, from 1100 "
-                                             "(default 20); groups: held-out seeds, from 1200 (default 5); "
-                                             "train-hog: training seeds, from 4100 (default 10); seed003: "
-                                             "evaluation seeds from 1, each 20 runs (default 1)")
-    p.add_argument("--preset", choices=("kinect_160", "kinect_640"), default="kinect_160",
-                   help="seed003: the robot camera's resolution (default kinect_160, QQVGA, as seed 003's timing)")
-    p.add_argument("--duration", type=float, help="table2, tune, train-relations and groups: s of each airport run "
-                                                  "(default: the scenario's; the others: 60)")
-    p.add_argument("--runs", type=int, default=8, help="seed001: filter runs per sequence and mode (default 8, as "
-                                                       "seed 001's)")
-    p.add_argument("--tune", action="store_true", help="seed001: choose the filter's pooled-likelihood parameters on "
-                                                       "training sequences (rooms 3 and 2 at seeds 4000, 4001) in "
-                                                       "place of the tables: tune.md, tune.json")
-    p.add_argument("--trials", type=int, default=50, help="tune: trials (default 50)")
-    p.add_argument("--storage", help="tune: an Optuna storage to keep and resume the study, e.g. sqlite:///study.db")
-    p.add_argument("--quick", action="store_true", help="train-detector: 4 short training seeds, 1 validation and "
-                                                        "1 test seed (a smoke test, not models to ship)")
-    p.add_argument("--workers", type=int, default=2, help="train-detector, table2, train-relations, groups, "
-                                                          "seed001 and seed003: processes running the simulations "
-                                                          "(default 2)")
-    p.set_defaults(func=_cmd_experiment)
+    _add_commands(p, EXPERIMENTS, "EXPERIMENT")
     p = sub.add_parser("dataset", help="labelled datasets: generate, export, evaluate-detector "
                                        "(docs/dataset-format.md)")
     dataset = p.add_subparsers(dest="dataset_command", required=True)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import rerun as rr
 
-from pipeline.frames import compose, transform_points
+from pipeline.frames import compose, rotate, rotate_covariances, rotation, transform_points
 
 from .loop import Frame
 
@@ -80,10 +80,8 @@ class Recording:
         rec.log("world/detections", rr.Points2D(det, radii=0.12, colors=[255, 200, 0]))
         tr = frame.tracks
         pos = transform_points(w, tr.position)
-        c, s = np.cos(w[2]), np.sin(w[2])
-        rot = np.array([[c, -s], [s, c]])
-        vel = tr.velocity @ rot.T
-        cov = rot @ tr.position_covariance @ rot.T
+        vel = rotate(w, tr.velocity)
+        cov = rotate_covariances(rotation(w), tr.position_covariance)
         ids = tr.track_id.astype(int)
         rec.log("world/tracks", rr.Points2D(pos, radii=0.2, class_ids=ids % 256, labels=[f"T{i}" for i in ids]))
         rec.log("world/tracks/velocity", rr.Arrows2D(origins=pos, vectors=vel, class_ids=ids % 256))

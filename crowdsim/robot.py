@@ -1,10 +1,10 @@
-"""The robot: differential-drive kinematics, wheel odometry, and a route driver with a laser safety stop."""
+"""The robot's body: differential-drive kinematics and wheel odometry (what drives it: crowdsim/drivers.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from pipeline.frames import compose, inverse, wrap_angle
+from pipeline.frames import compose, inverse
 
 
 class Robot:
@@ -16,8 +16,6 @@ class Robot:
         self.pose = np.array(params["start"], float)
         self.odom_pose = np.zeros(3)
         self.velocity = np.zeros(2)  # (v, omega) executed last step
-        self.route = np.asarray(params["route"], float) if params["route"] else np.zeros((0, 2))
-        self.target = 0
         self.clock = 0.0  # s the robot has been driven (the warm-up not counted)
 
     @property
@@ -34,15 +32,6 @@ class Robot:
         self.odom_pose = compose(self.odom_pose, arc(distance / dt, turn / dt, dt))
         self.velocity = np.array([v, omega])
         self.clock += dt
-
-    def script_command(self) -> tuple[float, float]:
-        """The script driver's (v, omega) now: the row of ``script`` ([duration, v, omega], held in turn) that
-        ``clock`` falls in, from the first again with ``loop``; after the last, standing."""
-        rows = np.asarray(self.p["script"], float)
-        ends = np.cumsum(rows[:, 0])
-        t = self.clock % ends[-1] if self.p["loop"] else self.clock
-        k = int(np.searchsorted(ends, t, side="right"))
-        return (0.0, 0.0) if k >= len(rows) else (float(rows[k, 1]), float(rows[k, 2]))
 
     def measured_motion(self, distance: float, turn: float) -> tuple[float, float]:
         """What the wheel encoders report for a true step of ``distance`` (m) and ``turn`` (rad).
@@ -61,27 +50,6 @@ class Robot:
         if yaw_var > 0:
             t += np.sqrt(yaw_var) * self.rng.standard_normal()
         return d, t
-
-    def drive_command(self, front_clearance: float) -> tuple[float, float]:
-        """(v, omega) towards the next route point, steering on the true pose (a robot localised against its map);
-        stop when something is nearer than the safety distance."""
-        if len(self.route) == 0 or self.target >= len(self.route):
-            return 0.0, 0.0
-        goal = self.route[self.target]
-        if np.linalg.norm(goal - self.pose[:2]) < 0.5:
-            self.target += 1
-            if self.target >= len(self.route):
-                if not self.p["loop"]:
-                    return 0.0, 0.0
-                self.target = 0
-            goal = self.route[self.target]
-        d = goal - self.pose[:2]
-        err = float(wrap_angle(np.arctan2(d[1], d[0]) - self.pose[2]))
-        omega = 2.0 * err
-        v = self.p["max_speed"] * max(0.0, np.cos(err)) if abs(err) < np.pi / 3 else 0.0
-        if front_clearance < self.p["safety_distance"]:
-            v = 0.0
-        return v, omega
 
 
 def limited(command: np.ndarray, velocity: np.ndarray, p: dict, dt: float) -> np.ndarray:

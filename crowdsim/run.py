@@ -25,6 +25,8 @@ import numpy as np
 import yaml
 from tqdm import tqdm
 
+from evaluation.columns import (DETECTIONS, FLAGS, FOLLOWING, GROUNDTRUTH, GROUPS, PERSONS, RELATIONS, ROBOT,
+                                TRACKS, VISIBILITY, WHOLE, Columns)
 from evaluation.heap import release_memory
 from evaluation.navigation import navigation_metrics, read_nav_run
 from evaluation.navigation_report import json_safe
@@ -37,34 +39,17 @@ from scenarios.geometry import wall_segments
 from .loop import Simulation
 from .outdir import write_directory
 
-CSV_HEADER = "frame,t,id,x,y,vx,vy"
-# the ground truth adds, per person, the true distance from the robot, whether within the evaluation's range, the
-# laser beams that hit them this cycle (all lasers), whether any did, and seed 000's own occlusion test: the
-# evaluation ignores persons out of range or physically occluded (evaluation/io.py)
-GT_HEADER = CSV_HEADER + ",range,in_range,beams,visible,visible_seed000,group"
 # the group stage's output (odom): the relations between tracks within RELATIONS_WRITTEN of each other (farther pairs
 # are past the gates, strength 0.1, and a pair of persons the group scores look at, within 3 m, has its tracks within
 # 3 m + twice the 1 m matching threshold), and one row per member of each group of two or more, with the group's
-# centroid and age
-RELATIONS_HEADER = "frame,t,track_a,track_b,strength"
+# centroid and age. Each file's columns: evaluation/columns.py.
 RELATIONS_FORMAT = ["%d", "%.2f", "%d", "%d", "%.6f"]
 RELATIONS_WRITTEN = 5.0  # m
-GROUPS_HEADER = "frame,t,group,id,x,y,age"
-DETECTIONS_HEADER = "frame,t,id,x,y,confidence"  # the fused detections the tracker was given, odom
-# the robot's true pose in the world and its odometry pose in odom (what the pipeline saw), per tracking cycle
-ROBOT_HEADER = "frame,t,x,y,yaw,odom_x,odom_y,odom_yaw"
 # a number in full: Python's str of a float is the shortest decimal that reads back as the very same float64 (1.5008,
 # not 1.5007999999999999), for the files the navigation metrics read, whose derivatives amplify any rounding
 EXACT = "%s"
-# every sensor frame's ground truth: for each person in the sensor's view or seen by it, the laser beams that hit
-# them or the camera's visible share of them (amount), whether in view, and whether in view but unseen (occluded);
-# t is the sensor frame's own time, frame the tracking cycle that delivered it
-VISIBILITY_HEADER = "frame,t,id,sensor,amount,in_view,occluded"
+# visibility.csv: t is the sensor frame's own time, frame the tracking cycle that delivered it
 VISIBILITY_FORMAT = ["%d", "%.2f", "%d", "%s", "%.4g", "%d", "%d"]
-# navigation (goals and follow drivers): every person alive per tracking cycle, world frame, with their disc radius;
-# for following, the follower's track of the target (-1: none) and whether a robot sensor saw the target
-PERSONS_HEADER = "frame,t,id,x,y,vx,vy,radius"
-FOLLOWING_HEADER = "frame,t,target_track,target_visible"
 CROWD_EVERY = 5  # tracking cycles between the crowd snapshots drawn in the top-down picture
 # the top-down picture draws every cycle of a run this long or shorter, and every k-th cycle of a run k times as
 # long, so it holds at most this much of the run
@@ -78,19 +63,16 @@ def _rows(frame_index: int, stamp: float, persons) -> np.ndarray:
                             persons.velocity])
 
 
-INTEGER_COLUMNS = {"id", "in_range", "beams", "visible", "visible_seed000", "target_track", "target_visible", "group"}
-
-
-def csv_format(header: str, real: str = "%.4f", t: str = "%.2f") -> list[str]:
-    """A CSV's column formats: frame and the integer columns whole, t with ``t``, the other columns with ``real``
-    (by default positions to a tenth of a millimetre, times to a hundredth of a second)."""
-    return ["%d", t] + ["%d" if name in INTEGER_COLUMNS else real for name in header.split(",")[2:]]
+def csv_format(columns: Columns, real: str = "%.4f", t: str = "%.2f") -> list[str]:
+    """A CSV's column formats: frame and the whole-number and flag columns whole, t with ``t``, the other columns
+    with ``real`` (by default positions to a tenth of a millimetre, times to a hundredth of a second)."""
+    return ["%d", t] + ["%d" if name in WHOLE or name in FLAGS else real for name in columns[2:]]
 
 
 # the files the navigation metrics read (evaluation/navigation.py read_nav_run), every number as it was
-ROBOT_FORMAT = csv_format(ROBOT_HEADER, EXACT, EXACT)
-PERSONS_FORMAT = csv_format(PERSONS_HEADER, EXACT, EXACT)
-FOLLOWING_FORMAT = csv_format(FOLLOWING_HEADER, EXACT, EXACT)
+ROBOT_FORMAT = csv_format(ROBOT, EXACT, EXACT)
+PERSONS_FORMAT = csv_format(PERSONS, EXACT, EXACT)
+FOLLOWING_FORMAT = csv_format(FOLLOWING, EXACT, EXACT)
 
 
 def _without_unset(value):
@@ -177,15 +159,16 @@ def _visibility_rows(frame, written: dict[str, float]) -> list[np.ndarray]:
 
 
 class CsvWriter:
-    """A CSV written as its rows come, a block at a time (the bytes are those ``np.savetxt`` of all rows at once
-    would write). ``fmt``: the columns' formats, ``csv_format(header)`` by default. ``names``: for a column of
-    indices, the names written in their place. The rows gather in one buffer made once: a long run's small arrays,
-    kept between blocks, would scatter over the heap and grow it."""
+    """A CSV of ``columns`` in ``folder``, written as its rows come, a block at a time (the bytes are those
+    ``np.savetxt`` of all rows at once would write). ``fmt``: the columns' formats, ``csv_format(columns)`` by
+    default. ``names``: for a column of indices, the names written in their place. The rows gather in one buffer
+    made once: a long run's small arrays, kept between blocks, would scatter over the heap and grow it."""
 
-    def __init__(self, path: Path, header: str, fmt: list[str] | None = None, names: dict[int, list[str]] = None):
-        self.file = open(path, "w")
-        self.file.write(header + "\n")
-        self.fmt = fmt or csv_format(header)
+    def __init__(self, folder: Path, columns: Columns, fmt: list[str] | None = None,
+                 names: dict[int, list[str]] = None):
+        self.file = open(Path(folder) / columns.file, "w")
+        self.file.write(columns.header + "\n")
+        self.fmt = fmt or csv_format(columns)
         self.names = {column: np.array(values, object) for column, values in (names or {}).items()}
         self.buffer = np.empty((BLOCK_ROWS, len(self.fmt)))
         self.rows = 0
@@ -238,11 +221,8 @@ class Picture:
 
 def _world_rows(index: int, persons, world_T_odom: np.ndarray) -> np.ndarray:
     """(frame, id, x, y) of persons in odom, moved to the world with the cycle's true transform."""
-    w = world_T_odom
-    c, s = np.cos(w[2]), np.sin(w[2])
-    x, y = persons.position[:, 0], persons.position[:, 1]
-    return np.column_stack([np.full(len(persons), index), persons.track_id, w[0] + c * x - s * y,
-                            w[1] + s * x + c * y])
+    world = compose(world_T_odom, np.column_stack([persons.position, np.zeros(len(persons))]))
+    return np.column_stack([np.full(len(persons), index), persons.track_id, world[:, :2]])
 
 
 def navigation_tables(figures: dict) -> str:
@@ -292,18 +272,15 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         recording = Recording(tmp / "recording.rrd", wall_segments(scenario), sim)
     sensors = [laser.name for laser in sim.lasers] + [camera.name for camera in (*sim.depth_cameras,
                                                                                  *sim.wall_cameras)]
-    csv = {"groundtruth": CsvWriter(tmp / "groundtruth.csv", GT_HEADER),
-           "tracks": CsvWriter(tmp / "tracks.csv", CSV_HEADER),
-           "detections": CsvWriter(tmp / "detections.csv", DETECTIONS_HEADER),
-           "relations": CsvWriter(tmp / "relations.csv", RELATIONS_HEADER, RELATIONS_FORMAT),
-           "groups": CsvWriter(tmp / "groups.csv", GROUPS_HEADER),
-           "robot": CsvWriter(tmp / "robot.csv", ROBOT_HEADER, ROBOT_FORMAT),
-           "visibility": CsvWriter(tmp / "visibility.csv", VISIBILITY_HEADER, VISIBILITY_FORMAT, {3: sensors})}
-    navigating = sim.driver in ("goals", "follow")
+    csv = {"groundtruth": CsvWriter(tmp, GROUNDTRUTH), "tracks": CsvWriter(tmp, TRACKS),
+           "detections": CsvWriter(tmp, DETECTIONS), "relations": CsvWriter(tmp, RELATIONS, RELATIONS_FORMAT),
+           "groups": CsvWriter(tmp, GROUPS), "robot": CsvWriter(tmp, ROBOT, ROBOT_FORMAT),
+           "visibility": CsvWriter(tmp, VISIBILITY, VISIBILITY_FORMAT, {3: sensors})}
+    navigating = sim.driver.name in ("goals", "follow")
     if navigating:
-        csv["persons"] = CsvWriter(tmp / "persons.csv", PERSONS_HEADER, PERSONS_FORMAT)
-    if sim.driver == "follow":
-        csv["following"] = CsvWriter(tmp / "following.csv", FOLLOWING_HEADER, FOLLOWING_FORMAT)
+        csv["persons"] = CsvWriter(tmp, PERSONS, PERSONS_FORMAT)
+    if sim.driver.name == "follow":
+        csv["following"] = CsvWriter(tmp, FOLLOWING, FOLLOWING_FORMAT)
     duration = scenario["duration"]
     picture = Picture(max(1, math.ceil(duration / PICTURE_SECONDS - 1e-9)))
     written: dict[str, float] = {}
@@ -323,7 +300,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
                 csv["visibility"].write(rows)
             if navigating:
                 csv["persons"].write(_person_rows(frame))
-            if sim.driver == "follow":
+            if sim.driver.name == "follow":
                 csv["following"].write(np.array([[frame.index, frame.stamp, frame.target_track,
                                                   frame.target_visible]]))
             in_range = int(frame.gt_tags.in_range.sum())
@@ -353,9 +330,9 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     del sim, recording
     release_memory()
     # scored from the files as written, so that `crowdsim evaluate` on them gives the same figures
-    tracking = score_tracking(CsvPair(tmp / "groundtruth.csv", tmp / "tracks.csv"),
+    tracking = score_tracking(CsvPair(tmp / GROUNDTRUTH.file, tmp / TRACKS.file),
                               scenario["evaluation"]["threshold"])
-    groups = score_groups(*(tmp / f"{name}.csv" for name in ("groundtruth", "tracks", "relations", "groups")),
+    groups = score_groups(*(tmp / c.file for c in (GROUNDTRUTH, TRACKS, RELATIONS, GROUPS)),
                           scenario["evaluation"]["threshold"])
     release_memory()  # and the scoring's memory before the drawing's
     from .plot import plot_run  # matplotlib, imported once the scoring is done: 20 MB less at its peak

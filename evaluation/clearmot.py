@@ -29,7 +29,7 @@ hypothesis matched to one is not a false positive, the pair is not a match (no M
 become the object's last known correspondence), and an ignored object left unmatched is not a miss. The pair is
 still carried into the next frame's step 1, so a track that follows a person through an occlusion keeps them.
 
-Beyond MOTA and MOTP (``summary``):
+Beyond MOTA and MOTP (``ClearMotResult``):
 
 - rIDS = IDS * GT / TP, the ID switches relative to the recall (seed 000, Sec. IV-B, after Leal-Taixe et al.).
 - MT and ML: ground-truth persons matched in more than 80% / fewer than 20% of the frames they count in
@@ -60,10 +60,11 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
 from .assignment import max_weight_matching
+from .metric import Result, accumulate
 from .sequence import Sequence, frames_of
 from .tables import Slots, grown, pair_key, split_pair_key
 
-__all__ = ["ClearMot", "FrameResult", "evaluate"]
+__all__ = ["ClearMot", "ClearMotResult", "FrameResult", "evaluate"]
 
 _EMPTY_I = np.zeros(0, np.int64)
 _EMPTY_F = np.zeros(0, np.float64)
@@ -86,6 +87,36 @@ class FrameResult:
     distances: np.ndarray  # [k] metres
     switched_gt_ids: np.ndarray  # the persons whose match this frame is an ID switch
     excused_hyp_ids: np.ndarray  # hypotheses matched to ignored persons: no false positives
+
+
+@dataclass(frozen=True)
+class ClearMotResult(Result):
+    """Totals over every frame scored (module docstring); None where undefined."""
+
+    mota: float | None
+    motp_m: float | None
+    fp: int
+    fn: int
+    id_switches: int
+    id_swaps: int
+    reinitialisations: int
+    rids: float | None
+    gt: int
+    matches: int
+    fp_rate: float | None
+    miss_rate: float | None
+    tsr: float | None
+    mt: int
+    pt: int
+    ml: int
+    fragmentations: int
+    persons: int
+    idf1: float | None
+    idp: float | None
+    idr: float | None
+    idtp: int
+    frames: int
+    threshold_m: float
 
 
 def _ids(a, name: str) -> np.ndarray:
@@ -128,7 +159,11 @@ def _set(keys_sorted: np.ndarray, values: np.ndarray, key: np.ndarray, value: np
 
 
 class ClearMot:
-    """Accumulates CLEAR-MOT and the trajectory and identity measures over frames."""
+    """Accumulates CLEAR-MOT and the trajectory and identity measures over frames: a chunk of whole frames at a time
+    (``add``, or ``scored_frames`` for each frame's result; evaluation/metric.py), or one frame given as arrays
+    (``update``, ``update_dissimilarity``: a loop scoring as it goes); then ``result``."""
+
+    passes = 1
 
     def __init__(self, threshold: float = 1.0):
         """``threshold``: largest ground-plane distance (m, inclusive) of a match; 1 m as in seed 000 Sec. IV-B,
@@ -146,7 +181,7 @@ class ClearMot:
         self._frames = self._gt = self._matches = self._fp = self._fn = self._ids = self._swaps = 0
         self._dist_sum = 0.0
         self._hyps = 0
-        self._last_frame: int | None = None  # the frame number last scored by ``score_frames``
+        self._last_frame: int | None = None  # the frame number last scored by ``scored_frames``
         # Per counted person (a slot): frames counted, frames matched, matched runs, matched in their last counted
         # frame; per pair of a counted person and a counted hypothesis: frames within the threshold (IDF1). Frames
         # are gathered (``_gathered``: counted ids, their matched flags, pair ids) and absorbed a batch at a time.
@@ -319,55 +354,58 @@ class ClearMot:
         return {"idf1": None if gt + hyps == 0 else 2 * idtp / (gt + hyps),
                 "idp": None if hyps == 0 else idtp / hyps, "idr": None if gt == 0 else idtp / gt, "idtp": idtp}
 
-    def summary(self) -> dict:
-        """Totals over all frames so far as plain, JSON-serialisable Python values (see module docstring)."""
+    def result(self) -> ClearMotResult:
+        """Totals over all frames so far (see module docstring)."""
         gt, tp = self._gt, self._matches
-        return {
-            "mota": None if gt == 0 else 1.0 - (self._fp + self._fn + self._ids) / gt,
-            "motp_m": None if tp == 0 else self._dist_sum / tp,
-            "fp": self._fp,
-            "fn": self._fn,
-            "id_switches": self._ids,
-            "id_swaps": self._swaps,
-            "reinitialisations": self._ids - self._swaps,
-            "rids": None if tp == 0 else self._ids * gt / tp,
-            "gt": gt,
-            "matches": tp,
-            "fp_rate": None if gt == 0 else self._fp / gt,
-            "miss_rate": None if gt == 0 else self._fn / gt,
-            "tsr": None if gt == 0 else tp / gt,
+        return ClearMotResult(
+            mota=None if gt == 0 else 1.0 - (self._fp + self._fn + self._ids) / gt,
+            motp_m=None if tp == 0 else self._dist_sum / tp,
+            fp=self._fp,
+            fn=self._fn,
+            id_switches=self._ids,
+            id_swaps=self._swaps,
+            reinitialisations=self._ids - self._swaps,
+            rids=None if tp == 0 else self._ids * gt / tp,
+            gt=gt,
+            matches=tp,
+            fp_rate=None if gt == 0 else self._fp / gt,
+            miss_rate=None if gt == 0 else self._fn / gt,
+            tsr=None if gt == 0 else tp / gt,
             **self._trajectories(),
             **self._identity(),
-            "frames": self._frames,
-            "threshold_m": self.threshold,
-        }
+            frames=self._frames,
+            threshold_m=self.threshold,
+        )
+
+    def add(self, gt: Sequence, tracks: Sequence) -> None:
+        """Score a chunk of whole frames (``scored_frames`` without the per-frame results)."""
+        for _ in self.scored_frames(gt, tracks):
+            pass
+
+    def scored_frames(self, gt: Sequence, tracks: Sequence):
+        """Score a chunk of whole frames frame by frame (a chunk of a longer sequence too: the ClearMot remembers the
+        last frame it scored), yielding each frame number with its FrameResult. A frame number missing between two
+        is an empty frame: correspondences are not kept across it."""
+        for name, seq in (("ground truth", gt), ("tracks", tracks)):
+            dup = (np.diff(seq.frame) == 0) & (np.diff(seq.id) == 0) if len(seq) > 1 else _EMPTY_B
+            if dup.any():
+                k = int(np.flatnonzero(dup)[0])
+                raise ValueError(f"{name}: id {seq.id[k]} appears twice in frame {seq.frame[k]}")
+        frames = frames_of(gt, tracks)
+        gb, tb = gt.bounds(frames), tracks.bounds(frames)
+        for k, frame in enumerate(frames.tolist()):
+            if self._last_frame is not None and frame != self._last_frame + 1:
+                self._prev_gt = self._prev_hyp = _EMPTY_I  # a frame without rows between: nothing was matched in it
+            self._last_frame = frame
+            g, t = slice(gb[k], gb[k + 1]), slice(tb[k], tb[k + 1])
+            n, m = gb[k + 1] - gb[k], tb[k + 1] - tb[k]
+            dist = cdist(gt.position[g], tracks.position[t]) if n and m else np.zeros((n, m))
+            yield frame, self._update(gt.id[g], gt.ignore[g], tracks.id[t], dist)
 
 
 def evaluate(gt: Sequence, tracks: Sequence, threshold: float = 1.0) -> dict:
     """CLEAR-MOT and the trajectory and identity measures of ``tracks`` against ``gt`` over every frame either
-    has rows in (the summary of ``ClearMot``; ``gt.ignore`` marks occluded or out-of-range persons). A frame
-    number missing between two is an empty frame: correspondences are not kept across it."""
+    has rows in (``ClearMotResult`` as JSON values; ``gt.ignore`` marks occluded or out-of-range persons)."""
     cm = ClearMot(threshold)
-    for _ in score_frames(gt, tracks, cm):
-        pass
-    return cm.summary()
-
-
-def score_frames(gt: Sequence, tracks: Sequence, cm: ClearMot):
-    """Feed ``cm`` frame by frame (a chunk of a longer sequence too: ``cm`` remembers the last frame it scored);
-    yield each frame number with its FrameResult."""
-    for name, seq in (("ground truth", gt), ("tracks", tracks)):
-        dup = (np.diff(seq.frame) == 0) & (np.diff(seq.id) == 0) if len(seq) > 1 else _EMPTY_B
-        if dup.any():
-            k = int(np.flatnonzero(dup)[0])
-            raise ValueError(f"{name}: id {seq.id[k]} appears twice in frame {seq.frame[k]}")
-    frames = frames_of(gt, tracks)
-    gb, tb = gt.bounds(frames), tracks.bounds(frames)
-    for k, frame in enumerate(frames.tolist()):
-        if cm._last_frame is not None and frame != cm._last_frame + 1:
-            cm._prev_gt = cm._prev_hyp = _EMPTY_I  # a frame without rows between: nothing was matched in it
-        cm._last_frame = frame
-        g, t = slice(gb[k], gb[k + 1]), slice(tb[k], tb[k + 1])
-        n, m = gb[k + 1] - gb[k], tb[k + 1] - tb[k]
-        dist = cdist(gt.position[g], tracks.position[t]) if n and m else np.zeros((n, m))
-        yield frame, cm._update(gt.id[g], gt.ignore[g], tracks.id[t], dist)
+    accumulate([cm], [(gt, tracks)])
+    return cm.result().as_dict()

@@ -12,14 +12,15 @@ import heapq
 
 import numpy as np
 
-from .clearmot import ClearMot, score_frames
+from .clearmot import ClearMot
+from .columns import GROUNDTRUTH, GROUPS, RELATIONS
 from .groups import GroupFrame, GroupMetrics
 from .io import REQUIRED, EvaluationInputError, Ignored, table_chunks
 from .score import pct
 from .sequence import Sequence
 
-RELATIONS_COLUMNS = ("frame", "track_a", "track_b", "strength")
-GROUPS_COLUMNS = ("frame", "group", "id")
+RELATIONS_COLUMNS = RELATIONS.pick("frame", "track_a", "track_b", "strength")
+GROUPS_COLUMNS = GROUPS.pick("frame", "group", "id")
 
 
 def frame_rows(path, required: tuple[str, ...], read: tuple[str, ...] = ()):
@@ -66,8 +67,9 @@ def score_groups(gt_path, tracks_path, relations_path, groups_path, threshold: f
     """The group metrics of a run's four files (evaluation/groups.py ``GroupMetrics.summary``); the ground truth's
     ignored rows as ``io.Ignored`` says."""
     ignored = Ignored(occlusion, visible_column, max_range)
-    streams = (frame_rows(gt_path, (*REQUIRED, "group"), ignored.columns), frame_rows(tracks_path, REQUIRED),
-               frame_rows(relations_path, RELATIONS_COLUMNS), frame_rows(groups_path, GROUPS_COLUMNS))
+    streams = (frame_rows(gt_path, (*REQUIRED, *GROUNDTRUTH.pick("group")), ignored.columns),
+               frame_rows(tracks_path, REQUIRED), frame_rows(relations_path, RELATIONS_COLUMNS),
+               frame_rows(groups_path, GROUPS_COLUMNS))
     cm, metrics = ClearMot(threshold), GroupMetrics()
     for frame, (gt, tracks, relations, groups) in merged(*streams):
         gt_ids, track_ids = _ints(gt, "id"), _ints(tracks, "id")
@@ -78,7 +80,7 @@ def score_groups(gt_path, tracks_path, relations_path, groups_path, threshold: f
         if len(gt_ids) or len(track_ids):
             seq_gt = Sequence.from_rows(np.full(len(gt_ids), frame), gt_ids, gt_xy, ignore=ignore)
             seq_tr = Sequence.from_rows(np.full(len(track_ids), frame), track_ids, track_xy)
-            (_, result), = score_frames(seq_gt, seq_tr, cm)
+            (_, result), = cm.scored_frames(seq_gt, seq_tr)
         counted = ~ignore
         metrics.update(GroupFrame(
             gt_id=gt_ids[counted], gt_group=_ints(gt, "group")[counted], gt_position=gt_xy[counted],

@@ -36,13 +36,16 @@ its row and column is matched without a solve, and the Hungarian runs per frame 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from evaluation.metric import Result, accumulate
 from evaluation.sequence import Sequence, frames_of
 from evaluation.tables import Slots, grown, pair_key, split_pair_key
 
-__all__ = ["Hota", "hota", "ALPHAS", "same_frame_pairs", "close_pairs", "matching_by_frame", "check_ids"]
+__all__ = ["Hota", "HotaResult", "hota", "ALPHAS", "same_frame_pairs", "close_pairs", "matching_by_frame", "check_ids"]
 
 ALPHAS = np.arange(1, 20) / 20  # 0.05 ... 0.95
 _TOL = 1e-12  # a similarity this close below alpha still counts (rounding of d / scale)
@@ -145,6 +148,31 @@ def matching_by_frame(rows: np.ndarray, cols: np.ndarray, weight: np.ndarray, gr
     return np.sort(np.concatenate(chosen))
 
 
+@dataclass(frozen=True)
+class HotaPerAlpha(Result):
+    """The figures at each alpha (lists over ``alpha``)."""
+
+    alpha: list
+    hota: list
+    deta: list
+    assa: list
+    loca: list
+    tp: list
+    fn: list
+    fp: list
+
+
+@dataclass(frozen=True)
+class HotaResult(Result):
+    """HOTA, DetA, AssA, LocA: the means over alpha (module docstring), and ``per_alpha``."""
+
+    hota: float | None
+    deta: float | None
+    assa: float | None
+    loca: float | None
+    per_alpha: HotaPerAlpha
+
+
 def _jsonable(a) -> list:
     return [None if x is None else float(x) for x in a]
 
@@ -158,9 +186,12 @@ def _scale(scale: float) -> float:
 
 class Hota:
     """HOTA over a sequence given as chunks of whole frames in frame order, in two passes over the same chunks
-    (steps 1 and 2-3 of the module docstring): ``count`` every chunk, ``align``, ``match`` every chunk again,
-    ``result``. The state is per gt id, per track id and per (gt id, track id) pair ever closer than ``scale``;
-    sums are taken in frame order, so the figures do not depend on where the chunks are cut."""
+    (evaluation/metric.py; steps 1 and 2-3 of the module docstring): ``add`` every chunk (counting), ``next_pass``
+    (the alignment), ``add`` every chunk again (matching), ``result``. The state is per gt id, per track id and per
+    (gt id, track id) pair ever closer than ``scale``; sums are taken in frame order, so the figures do not depend
+    on where the chunks are cut."""
+
+    passes = 2
 
     def __init__(self, scale: float = 2.0):
         self.scale = _scale(scale)
@@ -180,7 +211,11 @@ class Hota:
         g, t = self.gt_ids(gt.id, add), self.track_ids(tracks.id, add)
         return gi, ti, 1.0 - d / self.scale, self.pairs(pair_key(g[gi], t[ti]), add), g, t
 
-    def count(self, gt: Sequence, tracks: Sequence) -> None:
+    def add(self, gt: Sequence, tracks: Sequence) -> None:
+        """A chunk of the first pass (counted) or, after ``next_pass``, of the second (matched)."""
+        (self._count if self.alignment is None else self._match)(gt, tracks)
+
+    def _count(self, gt: Sequence, tracks: Sequence) -> None:
         """Pass 1 (step 1): presence per id and the soft count of potential matches per pair."""
         gi, ti, s, pair, g, t = self._close(gt, tracks, add=True)
         self.n_g, self.n_t = grown(self.n_g, len(self.gt_ids)), grown(self.n_t, len(self.track_ids))
@@ -191,7 +226,7 @@ class Hota:
         self.potential = grown(self.potential, len(self.pairs))
         np.add.at(self.potential, pair, s / (row[gi] + col[ti] - s))  # in frame order, as one bincount would
 
-    def align(self) -> None:
+    def next_pass(self) -> None:
         """Between the passes: the global alignment score A of every pair."""
         g, t = split_pair_key(self.pairs.keys)
         pot = self.potential[:len(self.pairs)]
@@ -199,7 +234,7 @@ class Hota:
             self.alignment = pot / (self.n_g[g] + self.n_t[t] - pot)
         self.hits = np.zeros((len(self.pairs), ALPHAS.size + 1), np.int32)
 
-    def match(self, gt: Sequence, tracks: Sequence) -> None:
+    def _match(self, gt: Sequence, tracks: Sequence) -> None:
         """Pass 2 (steps 2-3): one matching per frame on A * S, and the matches counted per pair and alpha."""
         gi, ti, s, pair, _, _ = self._close(gt, tracks, add=False)
         m = matching_by_frame(gi, ti, self.alignment[pair] * s, gt.frame[gi])
@@ -210,14 +245,14 @@ class Hota:
         self.gt_points += len(gt)
         self.track_points += len(tracks)
 
-    def result(self) -> dict:
-        """HOTA, DetA, AssA, LocA (see ``hota``)."""
+    def result(self) -> HotaResult:
+        """HOTA, DetA, AssA, LocA (module docstring)."""
         na = ALPHAS.size
-        per = {"alpha": [round(float(a), 2) for a in ALPHAS]}
+        alpha = [round(float(a), 2) for a in ALPHAS]
         if not self.gt_points and not self.track_points:
             none = [None] * na
-            per.update(hota=none, deta=none, assa=none, loca=none, tp=[0] * na, fn=[0] * na, fp=[0] * na)
-            return {"hota": None, "deta": None, "assa": None, "loca": None, "per_alpha": per}
+            return HotaResult(None, None, None, None, HotaPerAlpha(alpha, none, none, none, none, [0] * na, [0] * na,
+                                                                   [0] * na))
         used = np.flatnonzero(self.hits.any(axis=1))
         g, t = split_pair_key(self.pairs.keys[used])
         order = np.lexsort((self.track_ids.keys[t], self.gt_ids.keys[g]))  # by (gt id, track id)
@@ -234,12 +269,10 @@ class Hota:
         loca = np.where(has, loc_sum / np.maximum(tp, 1), 1.0)
         h = np.sqrt(deta * assa)
         any_tp = bool(has.any())
-        per.update(hota=_jsonable(h), deta=_jsonable(deta),
-                   assa=_jsonable(assa) if any_tp else [None] * na, loca=_jsonable(loca) if any_tp else [None] * na,
-                   tp=tp.tolist(), fn=fn.tolist(), fp=fp.tolist())
-        return {"hota": float(h.mean()), "deta": float(deta.mean()),
-                "assa": float(assa.mean()) if any_tp else None, "loca": float(loca.mean()) if any_tp else None,
-                "per_alpha": per}
+        per = HotaPerAlpha(alpha, _jsonable(h), _jsonable(deta), _jsonable(assa) if any_tp else [None] * na,
+                           _jsonable(loca) if any_tp else [None] * na, tp.tolist(), fn.tolist(), fp.tolist())
+        return HotaResult(float(h.mean()), float(deta.mean()), float(assa.mean()) if any_tp else None,
+                          float(loca.mean()) if any_tp else None, per)
 
 
 def hota(gt: Sequence, tracks: Sequence, scale: float = 2.0) -> dict:
@@ -247,7 +280,5 @@ def hota(gt: Sequence, tracks: Sequence, scale: float = 2.0) -> dict:
     ``hota``, ``deta``, ``assa``, ``loca`` (means over alpha) and ``per_alpha`` (lists ``alpha``, ``hota``, ``deta``,
     ``assa``, ``loca``, ``tp``, ``fn``, ``fp``). ``scale``: distance (m) at which the similarity reaches 0."""
     h = Hota(scale)
-    h.count(gt, tracks)
-    h.align()
-    h.match(gt, tracks)
-    return h.result()
+    accumulate([h], [(gt, tracks)])
+    return h.result().as_dict()

@@ -25,18 +25,15 @@ import numpy as np
 
 from scenarios.errors import Error
 
+from .columns import FLAGS, SHARES, TRACKS, WHOLE
 from .sequence import Sequence
 
-REQUIRED = ("frame", "id", "x", "y")
+REQUIRED = TRACKS.pick("frame", "id", "x", "y")  # of any ground truth or tracks file
 CHUNK_ROWS = 1 << 14  # rows parsed at once (about 170 frames of the airport): a few MB, whatever the file's length
-# columns of ids and counts, whatever the file: whole numbers below 2^53 in size. Every value is parsed as a float64,
-# which from 2^53 on rounds them (2^53 + 1 reads as 2^53, so two ids would merge silently); 1e20 would wrap to
-# INT64_MIN.
-WHOLE = frozenset({"frame", "id", "group", "track_a", "track_b", "target_track", "target_visible"})
+# ``WHOLE`` columns (ids and counts, whatever the file) hold whole numbers below 2^53 in size. Every value is parsed
+# as a float64, which from 2^53 on rounds them (2^53 + 1 reads as 2^53, so two ids would merge silently); 1e20 would
+# wrap to INT64_MIN. ``FLAGS`` hold 0 or 1, ``SHARES`` numbers in [0, 1] (evaluation/columns.py).
 EXACT = 2.0 ** 53
-# columns of yes/no flags, 0 or 1 (a ground truth's visibility and range tags), and of shares in [0, 1]
-FLAGS = frozenset({"visible", "visible_seed000", "in_range", "in_view", "occluded"})
-SHARES = frozenset({"strength"})
 HEADER_MAX = 1 << 16  # characters of a header line: a longer one is no CSV of ours (a binary file, /dev/zero)
 
 

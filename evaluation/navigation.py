@@ -31,6 +31,7 @@ import numpy as np
 
 from pipeline.frames import wrap_angle
 
+from .columns import FOLLOWING, PERSONS, ROBOT
 from .io import EvaluationInputError, read_table, read_text
 
 __all__ = ["NavEpisode", "PersonRows", "navigation_metrics", "navigation_task", "read_nav_run"]
@@ -410,9 +411,9 @@ def navigation_metrics(ep: NavEpisode) -> dict:
 
 # ---- reading a run directory ----
 
-ROBOT_COLUMNS = ("frame", "t", "x", "y", "yaw")
-PERSON_COLUMNS = ("frame", "t", "id", "x", "y", "vx", "vy", "radius")
-FOLLOWING_COLUMNS = ("frame", "t", "target_track", "target_visible")
+ROBOT_COLUMNS = ROBOT.pick("frame", "t", "x", "y", "yaw")  # the true pose
+PERSON_COLUMNS = PERSONS.pick(*PERSONS)
+FOLLOWING_COLUMNS = FOLLOWING.pick(*FOLLOWING)
 NAV_KEYS = ("task", "goal", "goal_radius", "robot_radius", "time_limit", "walls", "target_id", "band")
 
 
@@ -492,7 +493,7 @@ def read_nav_run(run_dir) -> NavEpisode:
     (crowdsim/navigate.py ``episode_metrics``), and the figures are equal to the last bit."""
     run_dir = Path(run_dir)
     spec = _navigation_spec(run_dir / "navigation.json")
-    path = run_dir / "robot.csv"
+    path = run_dir / ROBOT.file
     robot = read_table(path, ROBOT_COLUMNS)
     frames = robot["frame"].astype(np.int64)
     if not len(frames) or (np.diff(frames) <= 0).any() or (np.diff(robot["t"]) <= 0).any():
@@ -507,7 +508,7 @@ def read_nav_run(run_dir) -> NavEpisode:
                                        f"robot.csv")
         return k
 
-    path = run_dir / "persons.csv"
+    path = run_dir / PERSONS.file
     people = read_table(path, PERSON_COLUMNS)
     if (people["radius"] <= 0).any():
         raise EvaluationInputError(f"{path}: column radius must hold numbers above 0 (m)")
@@ -518,7 +519,7 @@ def read_nav_run(run_dir) -> NavEpisode:
         raise EvaluationInputError(f"{path}: an id appears twice in one frame; expected ids unique within a frame")
     following = {}
     if spec["task"] == "follow":
-        path = run_dir / "following.csv"
+        path = run_dir / FOLLOWING.file
         table = read_table(path, FOLLOWING_COLUMNS)
         if not np.array_equal(table["frame"].astype(np.int64), frames):
             raise EvaluationInputError(f"{path}: column frame differs from robot.csv's; expected one row per "

@@ -62,16 +62,31 @@ differently; its online_analysis uses c = 1 m (the matching threshold), p = 1 an
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from evaluation.assignment import ospa_t_labels
 from evaluation.hota import check_ids, close_pairs, matching_by_frame, same_frame_pairs
+from evaluation.metric import Result
 from evaluation.sequence import Sequence, frames_of
 from evaluation.tables import Counts, ExactSum, Slots, grown, pair_key, split_pair_key
 
-__all__ = ["Ospa", "ospa"]
+__all__ = ["Ospa", "OspaResult", "ospa"]
 
 _GRID_CELLS = 1 << 18  # a chunk's pairs are counted on its (gt ids x track ids) grid up to this size (2 MB)
+
+
+@dataclass(frozen=True)
+class OspaResult(Result):
+    """The means over frames (None without frames), the frames averaged and the track ids given a gt label."""
+
+    ospa: float | None
+    localisation: float | None
+    cardinality: float | None
+    ospa_t: float | None
+    frames: int
+    labelled_tracks: int
 
 
 def _per_frame(n: np.ndarray, m: np.ndarray, gain_sum: np.ndarray, cp: float, p: float):
@@ -84,9 +99,12 @@ def _per_frame(n: np.ndarray, m: np.ndarray, gain_sum: np.ndarray, cp: float, p:
 
 class Ospa:
     """OSPA and OSPA-T over a sequence given as chunks of whole frames in frame order, in two passes over the same
-    chunks: ``count`` every chunk (plain OSPA, and what OSPA-T's labels need), ``label``, ``score`` every chunk
-    again (OSPA-T), ``result``. The state is per gt id, per track id and per (gt id, track id) pair ever present in
-    the same frame; the means over frames are exactly rounded sums, whatever the chunks."""
+    chunks (evaluation/metric.py): ``add`` every chunk (plain OSPA, and what OSPA-T's labels need), ``next_pass``
+    (the labels), ``add`` every chunk again (OSPA-T), ``result``. The state is per gt id, per track id and per
+    (gt id, track id) pair ever present in the same frame; the means over frames are exactly rounded sums, whatever
+    the chunks."""
+
+    passes = 2
 
     def __init__(self, c: float = 1.0, p: float = 1.0, label_penalty: float = 1.0):
         self.c, self.p, self.alpha = float(c), float(p), float(label_penalty)
@@ -114,7 +132,12 @@ class Ospa:
         fr = np.searchsorted(frames, gt.frame[gi])
         return frames, np.maximum(ng, nt), np.minimum(ng, nt), gi, ti, fr, d ** self.p
 
-    def count(self, gt: Sequence, tracks: Sequence) -> dict:
+    def add(self, gt: Sequence, tracks: Sequence):
+        """A chunk of the first pass (``_count``: its plain OSPA per frame returned) or, after ``next_pass``, of the
+        second (``_score``: its OSPA-T per frame returned)."""
+        return (self._count if self.labels is None else self._score)(gt, tracks)
+
+    def _count(self, gt: Sequence, tracks: Sequence) -> dict:
         """Pass 1: plain OSPA per frame of the chunk (returned, and added to the means), and OSPA-T's step 1
         statistics."""
         frames, n, m, gi, ti, fr, dp = self._frames(gt, tracks)
@@ -149,7 +172,7 @@ class Ospa:
         cell = np.flatnonzero(grid)  # row-major over ascending slots: the keys come ascending
         self.together.add_counts(pair_key(gu[cell // tu.size], tu[cell % tu.size]), grid[cell])
 
-    def label(self) -> None:
+    def next_pass(self) -> None:
         """Between the passes: OSPA-T step 1 (module docstring), one global assignment of track ids to gt ids,
         solved on the pairs (evaluation/assignment.py); what only it needed is let go."""
         close = self.close.keys
@@ -174,11 +197,11 @@ class Ospa:
         self.assigned[track_slot] = True
 
     def track_labels(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """After ``label``: the track ids in ascending order, the gt id each is labelled with, whether it is."""
+        """After ``next_pass``: the track ids in ascending order, the gt id each is labelled with, whether it is."""
         order = np.argsort(self.track_ids.keys)
         return self.track_ids.keys[order], self.labels[order], self.assigned[order]
 
-    def score(self, gt: Sequence, tracks: Sequence) -> np.ndarray:
+    def _score(self, gt: Sequence, tracks: Sequence) -> np.ndarray:
         """Pass 2: OSPA-T per frame of the chunk with the labelled base distance (returned, and added to the
         mean)."""
         frames, n, m, gi, ti, fr, dp = self._frames(gt, tracks)
@@ -192,12 +215,11 @@ class Ospa:
         self.sums["ospa_t"].add(ot)
         return ot
 
-    def result(self) -> dict:
-        """The means over frames (``ospa``, ``localisation``, ``cardinality``, ``ospa_t``; None without frames),
-        ``frames`` and ``labelled_tracks``."""
+    def result(self) -> OspaResult:
+        """The means over frames, ``frames`` and ``labelled_tracks``."""
         means = {name: total.mean() for name, total in self.sums.items()}
-        return {**means, "frames": self.sums["ospa"].count,
-                "labelled_tracks": 0 if self.assigned is None else int(self.assigned.sum())}
+        return OspaResult(**means, frames=self.sums["ospa"].count,
+                          labelled_tracks=0 if self.assigned is None else int(self.assigned.sum()))
 
 
 def ospa(gt: Sequence, tracks: Sequence, c: float = 1.0, p: float = 1.0, label_penalty: float = 1.0) -> dict:
@@ -206,7 +228,7 @@ def ospa(gt: Sequence, tracks: Sequence, c: float = 1.0, p: float = 1.0, label_p
     ``per_frame`` (lists ``frame``, ``ospa``, ``localisation``, ``cardinality``, ``ospa_t``); see the module docstring.
     ``c``: cut-off (m); ``p``: order; ``label_penalty``: OSPA-T's alpha (m)."""
     o = Ospa(c, p, label_penalty)
-    per = o.count(gt, tracks)
-    o.label()
-    per["ospa_t"] = o.score(gt, tracks)
-    return {**o.result(), "per_frame": {name: values.tolist() for name, values in per.items()}}
+    per = o.add(gt, tracks)
+    o.next_pass()
+    per["ospa_t"] = o.add(gt, tracks)
+    return {**o.result().as_dict(), "per_frame": {name: values.tolist() for name, values in per.items()}}

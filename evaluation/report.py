@@ -19,16 +19,19 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .clearmot import ClearMot, evaluate, score_frames  # noqa: E402
+from pipeline.frames import compose, inverse, to_frame  # noqa: E402
+
+from .clearmot import ClearMot, evaluate  # noqa: E402
+from .columns import DETECTIONS, GROUNDTRUTH, GROUPS, ROBOT, TRACKS  # noqa: E402
 from .io import load_sequence, read_table  # noqa: E402
 from .score import SEED001_COLUMNS, pct, score_tracking, seeds_table, tracking_table  # noqa: E402
 from .sequence import Sequence  # noqa: E402
 from .stream import CsvPair  # noqa: E402
 from .svg import write_svg  # noqa: E402
 
-TRACK_COLUMNS = ("frame", "t", "id", "x", "y", "vx", "vy")
-GROUP_COLUMNS = ("frame", "t", "group", "id", "x", "y")  # groups.csv's; age is not drawn
-ROBOT_COLUMNS = ("frame", "t", "x", "y", "yaw", "odom_x", "odom_y", "odom_yaw")
+TRACK_COLUMNS = TRACKS.pick(*TRACKS)  # and the ground truth's first columns
+GROUP_COLUMNS = GROUPS.pick("frame", "t", "group", "id", "x", "y")  # age is not drawn
+ROBOT_COLUMNS = ROBOT.pick(*ROBOT)
 SEED001_THRESHOLD = 0.3  # m, seed 001 Sec. 4: "within a 30 cm radius of the ground truth"
 
 
@@ -39,7 +42,7 @@ def _events(gt: Sequence, tracks: Sequence, threshold: float) -> dict:
     stamp_of = dict(zip(gt.frame.tolist(), gt.stamp.tolist())) if gt.stamp is not None else {}
     if tracks.stamp is not None:
         stamp_of.update(zip(tracks.frame.tolist(), tracks.stamp.tolist()))
-    for f, r in score_frames(gt, tracks, cm):
+    for f, r in cm.scored_frames(gt, tracks):
         frames.append(f)
         counts.append((r.gt, r.matches, r.fp, r.fn, r.id_switches, float(r.distances.sum())))
         if r.id_switches:
@@ -73,11 +76,7 @@ def _to_odom(walls: np.ndarray, robot: dict) -> np.ndarray:
         return np.asarray(walls, float).reshape(-1, 2, 2)
     true = np.array([robot["x"][0], robot["y"][0], robot["yaw"][0]])
     odom = np.array([robot["odom_x"][0], robot["odom_y"][0], robot["odom_yaw"][0]])
-    yaw = true[2] - odom[2]  # world_T_odom's rotation
-    c, s = np.cos(yaw), np.sin(yaw)
-    origin = true[:2] - np.array([[c, -s], [s, c]]) @ odom[:2]
-    rel = np.asarray(walls, float) - origin
-    return np.stack([c * rel[..., 0] + s * rel[..., 1], -s * rel[..., 0] + c * rel[..., 1]], -1)
+    return to_frame(compose(true, inverse(odom)), np.asarray(walls, float).reshape(-1, 2)).reshape(-1, 2, 2)
 
 
 def _topdown(path, walls, gt, tracks, events, robot, title) -> None:
@@ -158,22 +157,22 @@ def _metres(v) -> str:
 def write_report(out: Path, run_dir: Path, walls: np.ndarray, threshold: float, title: str) -> dict:
     """Write report.md and its figures into ``out`` from the run in ``run_dir``; return the tracking figures."""
     out, run_dir = Path(out), Path(run_dir)
-    gt = load_sequence(run_dir / "groundtruth.csv")
-    tracks = load_sequence(run_dir / "tracks.csv", occlusion=False)
-    robot = read_table(run_dir / "robot.csv", ROBOT_COLUMNS) if (run_dir / "robot.csv").exists() \
+    gt = load_sequence(run_dir / GROUNDTRUTH.file)
+    tracks = load_sequence(run_dir / TRACKS.file, occlusion=False)
+    robot = read_table(run_dir / ROBOT.file, ROBOT_COLUMNS) if (run_dir / ROBOT.file).exists() \
         else {"frame": np.zeros(0)}
-    tracking = score_tracking(CsvPair(run_dir / "groundtruth.csv", run_dir / "tracks.csv"), threshold)
+    tracking = score_tracking(CsvPair(run_dir / GROUNDTRUTH.file, run_dir / TRACKS.file), threshold)
     seed001 = evaluate(gt, tracks, SEED001_THRESHOLD)
     events = _events(gt, tracks, threshold)
     walls = _to_odom(walls, robot)
     _topdown(out / "topdown_tracking.png", walls, gt, tracks, events, robot, title)
     _counts(out / "counts.png", events)
     _over_time(out / "over_time.png", events)
-    write_svg(out / "topdown.svg", tracks=_columns(run_dir / "tracks.csv", TRACK_COLUMNS),
-              groundtruth=_columns(run_dir / "groundtruth.csv", TRACK_COLUMNS),
-              detections=_columns(run_dir / "detections.csv", TRACK_COLUMNS[:5]),
+    write_svg(out / "topdown.svg", tracks=_columns(run_dir / TRACKS.file, TRACK_COLUMNS),
+              groundtruth=_columns(run_dir / GROUNDTRUTH.file, TRACK_COLUMNS),
+              detections=_columns(run_dir / DETECTIONS.file, DETECTIONS.pick("frame", "t", "id", "x", "y")),
               robot=np.column_stack([robot["t"], robot["odom_x"], robot["odom_y"]]) if len(robot["frame"]) else None,
-              walls=walls, groups=_columns(run_dir / "groups.csv", GROUP_COLUMNS), title=title)
+              walls=walls, groups=_columns(run_dir / GROUPS.file, GROUP_COLUMNS), title=title)
     ignored = int(gt.ignore.sum())
     lines = [
         f"# Tracking report: {title}", "",
@@ -200,7 +199,7 @@ def write_report(out: Path, run_dir: Path, walls: np.ndarray, threshold: float, 
         "[topdown.svg](topdown.svg): the run animated, to open in a browser and zoom into (detections as diamonds "
         "with their id and time, tracks with velocity arrows every second, the robot's odometry in grey"
         + (", each tracked group's members joined to its centroid, labelled G and its id"
-           if (run_dir / "groups.csv").exists() else "") + ").", "",
+           if (run_dir / GROUPS.file).exists() else "") + ").", "",
     ]
     (out / "report.md").write_text("\n".join(lines))
     (out / "tracking.json").write_text(json.dumps({"tracking": tracking, "seed001": seed001}, indent=2) + "\n")

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .clearmot import ClearMot, score_frames
+from .clearmot import ClearMot, ClearMotResult
 from .heap import release_memory
-from .hota import Hota
-from .ospa import Ospa
+from .hota import Hota, HotaResult
+from .ospa import Ospa, OspaResult
 
 OSPA_CUTOFF, OSPA_ORDER = 1.0, 1.0  # m; the issue's c = 1 m, p = 1 (SPENCER's online_analysis uses the same)
 
@@ -27,7 +27,7 @@ def counted_chunks(frames, threshold: float):
     def chunks():
         for gt, tracks in frames:
             excused = [(np.full(len(r.excused_hyp_ids), frame), r.excused_hyp_ids)
-                       for frame, r in score_frames(gt, tracks, cm) if len(r.excused_hyp_ids)]
+                       for frame, r in cm.scored_frames(gt, tracks) if len(r.excused_hyp_ids)]
             keep = np.ones(len(tracks), bool)
             if excused:
                 ids = np.unique(tracks.id)
@@ -42,26 +42,32 @@ def counted_chunks(frames, threshold: float):
 def score_tracking(frames, threshold: float = 1.0) -> dict:
     """CLEAR-MOT, rIDS, MT/PT/ML, fragmentations, the id swap split and IDF1 of the tracks against the ground truth
     of ``frames`` (re-iterable aligned chunks: ``stream.CsvPair`` or ``stream.SequencePair``); then HOTA and OSPA on
-    what counts (``counted_chunks``). Two passes over ``frames``: HOTA's alignment and OSPA-T's labels are global."""
+    what counts (``counted_chunks``): metrics.json's tracking object. Two passes over ``frames``: HOTA's alignment
+    and OSPA-T's labels are global (evaluation/metric.py)."""
     h, o = Hota(), Ospa(OSPA_CUTOFF, OSPA_ORDER)
     chunks, cm = counted_chunks(frames, threshold)
     for gt, tracks in chunks:
-        h.count(gt, tracks)
-        o.count(gt, tracks)
-    tracking = cm.summary()
+        h.add(gt, tracks)
+        o.add(gt, tracks)
+    clearmot = cm.result()
     release_memory()  # what the first pass's chunks left in the heap, before the labelling's arrays
-    h.align()
-    o.label()
+    h.next_pass()
+    o.next_pass()
     release_memory()
     for gt, tracks in counted_chunks(frames, threshold)[0]:
-        h.match(gt, tracks)
-        o.score(gt, tracks)
-    hr, orr = h.result(), o.result()
-    tracking.update({"hota": hr["hota"], "deta": hr["deta"], "assa": hr["assa"], "loca": hr["loca"],
-                     "ospa_m": orr["ospa"], "ospa_localisation_m": orr["localisation"],
-                     "ospa_cardinality_m": orr["cardinality"], "ospa_t_m": orr["ospa_t"],
-                     "hota_per_alpha": {k: hr["per_alpha"][k] for k in ("alpha", "hota", "deta", "assa", "loca")}})
-    return tracking
+        h.add(gt, tracks)
+        o.add(gt, tracks)
+    return tracking_json(clearmot, h.result(), o.result())
+
+
+def tracking_json(clearmot: ClearMotResult, hota: HotaResult, ospa: OspaResult) -> dict:
+    """metrics.json's tracking object: CLEAR-MOT's figures, then HOTA's and OSPA's under their names there."""
+    per_alpha = hota.per_alpha
+    return {**clearmot.as_dict(), "hota": hota.hota, "deta": hota.deta, "assa": hota.assa, "loca": hota.loca,
+            "ospa_m": ospa.ospa, "ospa_localisation_m": ospa.localisation, "ospa_cardinality_m": ospa.cardinality,
+            "ospa_t_m": ospa.ospa_t,
+            "hota_per_alpha": {"alpha": per_alpha.alpha, "hota": per_alpha.hota, "deta": per_alpha.deta,
+                               "assa": per_alpha.assa, "loca": per_alpha.loca}}
 
 
 def pct(v) -> str:

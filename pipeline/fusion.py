@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from .frames import transform_points
+from .frames import rotate_covariances, rotation, transform_points
 from .types import DetectedPersons
 
 
@@ -15,14 +15,11 @@ def to_frame(dets: DetectedPersons, pose: np.ndarray, frame: str) -> DetectedPer
     sensor that scans a horizontal plane (a laser), a 4x4 rigid transform for one that looks in 3D (a camera)."""
     pose = np.asarray(pose, float)
     if pose.shape == (4, 4):
-        rot = pose[:3, :3]
-        pos = dets.position @ rot.T + pose[:3, 3]
+        pos = transform_points(pose, dets.position)
     else:
         pos = dets.position.copy()
         pos[:, :2] = transform_points(pose, dets.position[:, :2])
-        c, s = np.cos(pose[2]), np.sin(pose[2])
-        rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])  # a yaw: x-z and y-z terms turn too
-    cov = rot @ dets.covariance @ rot.T
+    cov = rotate_covariances(rotation(pose, 3), dets.covariance)  # a yaw turns the x-z and y-z terms too
     return DetectedPersons(dets.stamp, frame, dets.modality, dets.detection_id, pos, cov, dets.confidence,
                            height=dets.height, appearance=dets.appearance)
 

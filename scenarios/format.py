@@ -7,9 +7,11 @@ from __future__ import annotations
 
 import math
 
+from pipeline.tracking.nnt import NearestNeighbourTracker
+
 from .costs import laser_beams
 from .laser_presets import LASER_PRESETS
-from .schema import Field, ListOf, MapOf, Schema, Typed
+from .schema import Field, ListOf, MapOf, Schema, ScenarioError, Typed, slot_field, validate
 
 F = Field
 INIT_CONFIDENCE = 0.325  # the shipped robot-camera HOG model's track-start score (train-hog --camera robot prints it)
@@ -54,15 +56,6 @@ def _foreground_or_hog(p: dict):
 def _up_direction(p: dict):
     if math.hypot(*p["up"]) < 1e-6:
         return "up", f"{p['up']}; expected a direction (a non-zero vector), e.g. [0, -1, 0]: y is down in the image"
-
-
-def _imm_transition(p: dict):
-    k, T = len(p["imm_models"]), p["imm_transition"]
-    rows = [T[i * k:(i + 1) * k] for i in range(k)]
-    if (len(T) != k * k or any(abs(sum(r) - 1.0) > 1e-9 for r in rows)
-            or any(all(r[j] == 0 for r in rows) for j in range(k))):
-        return "imm_transition", (f"{T}; expected the {k} x {k} Markov matrix of the {k} imm_models, row-major: "
-                                  f"{k * k} numbers, each row summing to 1, each model reachable")
 
 
 def _outcomes_sum_to_one(p: dict):
@@ -517,62 +510,106 @@ NEAREST_FUSION = Schema({
 
 FUSION_TYPES = {"nearest": NEAREST_FUSION}
 
-# the NNT's parts (pipeline/tracking/nnt.py TrackerParams says why each default; a test keeps them equal)
-NNT_MODEL = Schema({
-    "model": F("str", required=True, choices=("cv", "ca", "ct", "brownian"), doc="the motion model"),
-    "process_noise": F("float", required=True, min=0.0, doc="its q, as the tracker's process_noise"),
-    "turn_rate_noise": F("float", 1.0, min=0.0, doc="rad^2/s^3, ct only, as the tracker's turn_rate_noise"),
-})
+# the NNT (pipeline/tracking/nnt.py): its parts, each named by type with the parameters its class declares (where
+# each default comes from is said there)
+FLAT_NNT = {
+    "process_noise": ("motion", "process_noise"), "turn_rate_noise": ("motion", "turn_rate_noise"),
+    "imm_models": ("motion", "models"), "imm_transition": ("motion", "transition"),
+    "gate_chi2": ("association", "gate_chi2"),
+    "n_confirm": ("initiation", "n_confirm"), "initial_velocity_variance": ("initiation", "initial_velocity_variance"),
+    "n_min": ("initiation", "n_min"), "v_min": ("initiation", "v_min"), "v_max": ("initiation", "v_max"),
+    "position_slack": ("initiation", "position_slack"),
+    "n_delete": ("deletion", "n_delete"), "n_delete_tentative": ("deletion", "tentative"),
+    "n_delete_young": ("deletion", "young"), "n_delete_mature": ("deletion", "mature"),
+    "mature_after": ("deletion", "mature_after"),
+    "duplicate_distance": ("duplicates", "distance"), "new_track_clearance": ("duplicates", "clearance"),
+}
+"""The NNT's keys before its parts were named (every bundled scenario and Table II's rows use them): each key ->
+(the part, its parameter there). The parts ``motion``, ``association``, ``initiation`` and ``deletion`` were named by
+a string, their type."""
 
-NNT = Schema({
-    "process_noise": F("float", 0.267, min=0.0, exclusive_min=True,
-                       doc="m^2/s^3, q_L of seed 000 Eq. 2 (its IMM's manoeuvre level, Sec. V-D); the white-noise "
-                           "density of the `motion` model's highest derivative (m^2/s^5 for ca, m^2/s for brownian)"),
-    "gate_chi2": F("float", 13.82, min=0.0, exclusive_min=True, doc="Mahalanobis gate (chi2 0.999 for 2 dof)"),
-    "n_confirm": F("int", 3, min=1, doc="detections that confirm a new track with initiation none"),
-    "n_delete": F("int", 5, min=1, doc="misses that delete a confirmed track (seed 000 Sec. V-C: 5)"),
-    "n_delete_tentative": F("int", 2, min=1,
-                            doc="misses that delete an unconfirmed track (Alg. 1's n_miss,max + 1; seed 000: none)"),
-    "initial_velocity_variance": F("float", 1.0, min=0.0, exclusive_min=True, doc="m^2/s^2 of a new track"),
-    "association": F("str", "greedy", choices=("greedy", "global", "multi"),
-                     doc="greedy NN, global NN (Jonker-Volgenant) or NN with several tracks per detection "
-                         "(seed 000 Sec. II-B, V-A, Table II)"),
-    "initiation": F("str", "none", choices=("none", "base", "extended"),
-                    doc="track initiation logic: none (n_confirm detections), base (speed from the latest detection "
-                        "in [v_min, v_max]) or extended (from every earlier one), seed 000 Alg. 1, Sec. V-B"),
-    "n_min": F("int", 6, min=2, doc="detections that confirm a track with base/extended (seed 000 Sec. V-B: 6)"),
-    "v_min": F("float", 0.2, min=0.0, doc="m/s, slowest speed between a candidate's detections (Sec. V-B: 0.2)"),
-    "v_max": F("float", 2.0, min=0.0, exclusive_min=True,
-               doc="m/s, fastest speed between a candidate's detections (Sec. V-B: 2)"),
-    "position_slack": F("float", 0.1, min=0.0,
-                        doc="m, detection noise allowed beyond v_max * dt (seed 000: none; 99% of the cycle-to-cycle "
-                            "error changes of laser_segments on airport_disembarkation)"),
-    "deletion": F("str", "fixed", choices=("fixed", "young_mature"),
-                  doc="track deletion logic: fixed (n_delete) or young_mature (seed 000 Sec. III-C)"),
-    "n_delete_young": F("int", 20, min=1, doc="misses that delete a young track (seed 000 Sec. V-C: 20)"),
-    "n_delete_mature": F("int", 50, min=1, doc="misses that delete a mature track (seed 000 Sec. V-C: 50)"),
-    "mature_after": F("int", 100, min=1, doc="detections that make a track mature (seed 000 Sec. V-C: 100)"),
-    "duplicate_distance": F("float", 0.0, min=0.0,
-                            doc="m, two tracks this close in 7 of their last 10 cycles: the one matched fewer times "
-                                "goes (the SPENCER NNT's duplicate deletion: 0.15); 0: off"),
-    "new_track_clearance": F("float", 0.0, min=0.0,
-                             doc="m, no new candidate this close to a track matched in the last 5 cycles (the SPENCER "
-                                 "NNT's close-by check: 0.25); 0: off"),
-    "motion": F("str", "cv", choices=("cv", "ca", "ct", "brownian", "imm"),
-                doc="motion model: constant velocity (seed 000 Eq. 1-2), constant acceleration, coordinated turn "
-                    "(EKF), Brownian, or an IMM of imm_models (Sec. III-A)"),
-    "turn_rate_noise": F("float", 1.0, min=0.0,
-                         doc="rad^2/s^3, white noise on the ct turn rate (seed 000: none; turns change by ~1 rad/s "
-                             "in ~1 s)"),
-    "imm_models": F(ListOf(F(NNT_MODEL), min_items=1),
-                    [{"model": "cv", "process_noise": 0.035, "turn_rate_noise": 1.0},
-                     {"model": "cv", "process_noise": 0.267, "turn_rate_noise": 1.0}],
-                    doc="the IMM's models (seed 000 Sec. V-D, Table II: cv with q 0.035 and cv with q 0.267)"),
-    "imm_transition": F(ListOf(F("float", min=0.0, max=1.0), min_items=1), [0.95, 0.05, 0.05, 0.95],
-                        doc="the IMM's Markov matrix, row-major, one row per imm_models entry, rows summing to 1: "
-                            "entry (i, j) is the chance that model i is followed by model j at the next cycle "
-                            "(seed 000: none; staying 0.95 keeps a mode for 0.8 s at 25 Hz)"),
-}, checks=(_ordered("v_min", "v_max", strict=True), _imm_transition))
+
+def _old_model(m):
+    """An ``imm_models`` entry ({model, process_noise, turn_rate_noise}) as a motion model's specification."""
+    if not (isinstance(m, dict) and "model" in m):
+        return m
+    m = {"type": m["model"], **{k: v for k, v in m.items() if k != "model"}}
+    if m["type"] != "ct":  # (every entry had a turn rate noise, which only ct has)
+        m.pop("turn_rate_noise", None)
+    return m
+
+
+def _old_key(key: str, where: str, part: str, moved: dict[str, str]) -> str:
+    """An error's key in a part made from old keys, as the old key (``moved``: parameter -> old key)."""
+    prefix = f"{where}{part}."
+    if not key.startswith(prefix):
+        return key
+    rest = key[len(prefix):]
+    name = rest.split(".")[0].split("[")[0]
+    old = {"type": part, **moved}.get(name)
+    if old is None:
+        return key
+    tail = rest[len(name):]
+    return where + old + (tail.replace(".type", ".model") if old == "imm_models" else tail)
+
+
+def _flat_nnt(value: dict, source: str, key: str) -> dict:
+    """The NNT's old keys (``FLAT_NNT``) moved into its parts, so that a file written before the parts had names
+    builds the same tracker. An old key goes to its part when the part's type has it, and is checked and dropped
+    when it does not (n_delete under young_mature did nothing before either); the duplicate guards are on when one
+    of their old keys is given (the other's old default, 0, leaves that guard off). An error names the key the file
+    gave; an old key given together with its new spelling is one error."""
+    old = [k for k in value if k in FLAT_NNT]
+    named = [p for p in NearestNeighbourTracker.PARTS if isinstance(value.get(p), str)]
+    if not (old or named):
+        return value
+    where = f"{key}." if key else ""
+    out = {k: v for k, v in value.items() if k not in FLAT_NNT}
+    for part in NearestNeighbourTracker.PARTS:
+        moved = {FLAT_NNT[k][1]: k for k in old if FLAT_NNT[k][0] == part}
+        given = value.get(part)
+        if not (moved or isinstance(given, str)):
+            continue
+        typed = NNT.fields[part].kind
+        if not (given is None or isinstance(given, (str, dict))):
+            validate(given, typed, source, where + part)  # names what is wrong with it
+        spec = dict(given) if isinstance(given, dict) else {"type": given} if isinstance(given, str) else {}
+        if part == "duplicates" and given is None:
+            spec = {"distance": 0.0, "clearance": 0.0}  # the old keys' defaults: off
+        kind = spec.get("type", typed.default)
+        elsewhere: dict[str, dict] = {}  # another type's keys: checked as that type's (v_min below v_max, say)
+        for name, k in moved.items():
+            home = kind if kind in typed.types and name in typed.types[kind].fields else next(
+                t for t, schema in typed.types.items() if name in schema.fields)
+            item = [_old_model(m) for m in value[k]] if k == "imm_models" and isinstance(value[k], list) else value[k]
+            try:
+                checked = validate(item, typed.types[home].fields[name], source, where + k)
+            except ScenarioError as e:  # (an imm_models entry's model is a type now)
+                raise ScenarioError(source, e.key.replace(".type", ".model"), e.message) from None
+            if home != kind:
+                elsewhere.setdefault(home, {})[name] = checked
+            elif isinstance(given, dict) and name in given:
+                raise ScenarioError(source, where + k, f"the old spelling of {where}{part}.{name}, which is given too; "
+                                                       f"expected only {where}{part}.{name} (`{k}: !remove` drops "
+                                                       "the old one where a base scenario gives it)")
+            else:
+                spec[name] = checked
+        for home, keys in elsewhere.items():  # checked, then dropped
+            _as_old({"type": home, **keys}, typed, source, where, part, moved)
+        out[part] = (validate(spec, typed, source, where + part) if isinstance(given, dict)
+                     else _as_old(spec, typed, source, where, part, moved))
+    return out
+
+
+def _as_old(spec: dict, typed: Typed, source: str, where: str, part: str, moved: dict[str, str]) -> dict:
+    """``spec``, a part made from old keys, validated; an error names the old key."""
+    try:
+        return validate(spec, typed, source, where + part)
+    except ScenarioError as e:
+        raise ScenarioError(source, _old_key(e.key, where, part, moved), e.message) from None
+
+
+NNT = Schema({name: slot_field(slot) for name, slot in NearestNeighbourTracker.PARTS.items()}, upgrade=_flat_nnt)
 
 MHT = Schema({
     "process_noise": F("float", 0.267, min=0.0, exclusive_min=True,
@@ -730,6 +767,8 @@ GROUP_STAGE_TYPES = {"coherent_motion": COHERENT_MOTION}
 
 # the methods a class of one's own must have (pipeline/assemble.py's protocols; a test keeps them equal)
 DETECTOR = Typed(DETECTOR_TYPES, "laser_segments", "detector", ("detect", "reset"))
+# a user's sensor: the loop schedules it by its period and hands its frames to the detector named after it
+CUSTOM_SENSOR = Typed({}, None, "sensor", ("start", "due", "captured", "capture", "pose_in_odom", "shown"))
 FUSION = Typed(FUSION_TYPES, "nearest", "fusion", ("fuse", "reset"))
 TRACKER = Typed(TRACKER_TYPES, "nnt", "tracker", ("update", "reset"))
 GROUP_STAGE = Typed(GROUP_STAGE_TYPES, "coherent_motion", "groups", ("update", "reset"))
@@ -788,6 +827,9 @@ SCENARIO = Schema({
     "sensors": F(Schema({"lasers": F(ListOf(F(LASER), min_items=1), required=True, doc="2D lasers on the robot"),
                          "depth_cameras": F(ListOf(F(DEPTH_CAMERA)), [], doc="RGB-D cameras on the robot"),
                          "wall_cameras": F(ListOf(F(WALL_CAMERA)), [], doc="fixed cameras in the world"),
+                         "custom": F(ListOf(F(CUSTOM_SENSOR)), optional=True,
+                                     doc="sensors of your own, each a class module.path:ClassName with the methods "
+                                         "of sensors/base.py's Sensor (docs/extending.md)"),
                          "tag": F(TAG, optional=True,
                                   doc="the tag reader for the follow driver (seed 001's RFID; required with driver: "
                                       "follow): the target's coarse range and bearing all round the robot")}),

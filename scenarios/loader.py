@@ -193,7 +193,8 @@ def check_sensor(sensor: dict, key: str, dt: float, source: str) -> None:
 
 def check_detectors(scenario: dict, source: str) -> None:
     """Detectors attached to sensors of the scenario, each built-in one to a kind of sensor it reads."""
-    kinds = {s["name"]: kind for kind in ("lasers", "depth_cameras", "wall_cameras") for s in scenario["sensors"][kind]}
+    kinds = {s["name"]: kind for kind in ("lasers", "depth_cameras", "wall_cameras", "custom")
+             for s in (scenario["sensors"][kind] or [])}
     pipeline = scenario["pipeline"]
     attached = [("pipeline.detector", pipeline["detector"], "lasers", "every laser")]
     for name, spec in pipeline["detectors"].items():
@@ -312,9 +313,12 @@ def check_geometry(scenario: dict, source: str) -> None:
         if src["stop"] < src["start"]:
             raise ScenarioError(source, f"sources[{i}].stop", f"expected a time after sources[{i}].start")
     seen: dict[str, str] = {}
-    for kind in ("lasers", "depth_cameras", "wall_cameras"):
-        for i, sensor in enumerate(scenario["sensors"][kind]):
+    for kind in ("lasers", "depth_cameras", "wall_cameras", "custom"):
+        for i, sensor in enumerate((scenario["sensors"][kind] or [])):
             key = f"sensors.{kind}[{i}].name"
+            if not isinstance(sensor.get("name"), str):
+                raise ScenarioError(source, key, f"{'missing' if 'name' not in sensor else repr(sensor['name'])}; "
+                                                 "expected the sensor's name (a sensor of your own is given one too)")
             if not SENSOR_NAME.fullmatch(sensor["name"]):
                 raise ScenarioError(source, key, f"{sensor['name']!r}; expected a name of letters, digits and _ . - "
                                                  "(it names the sensor's frame, its MuJoCo body and its files)")
@@ -322,7 +326,8 @@ def check_geometry(scenario: dict, source: str) -> None:
                 raise ScenarioError(source, key, f"{sensor['name']!r} is taken ({seen.get(sensor['name'], 'reserved')})"
                                                  "; expected a name of its own for every sensor")
             seen[sensor["name"]] = key
-            check_sensor(sensor, f"sensors.{kind}[{i}]", scenario["dt"], source)
+            if kind != "custom":  # a sensor of one's own checks its own parameters
+                check_sensor(sensor, f"sensors.{kind}[{i}]", scenario["dt"], source)
     check_detectors(scenario, source)
     check_driver(scenario, source)
     check_places(scenario, source)

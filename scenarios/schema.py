@@ -6,6 +6,7 @@ expected, so a user fixes one thing at a time and never gets a traceback from de
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import inspect
 import math
@@ -60,13 +61,16 @@ class Schema:
     """A mapping's keys. With ``presets``, the key ``preset`` names a bundle of values (a sensor model, say) that
     fills the keys the mapping leaves out, before the fields' own defaults. ``legacy`` maps an old key (a field of
     its own, checked there) to the key ``section.name`` of this mapping that now holds it: files written before the
-    change keep working, and the validated data holds the new spelling only."""
+    change keep working, and the validated data holds the new spelling only. ``upgrade`` does the same for an older
+    form of the whole mapping: given the mapping (``!remove`` keys left out), the file and the mapping's key, it
+    returns the mapping in the current form (or raises ScenarioError naming the old key at fault)."""
 
     fields: dict[str, Field]
     presets: dict[str, dict] | None = None
     legacy: dict[str, str] | None = None
     # checks across the mapping's keys, run on its validated values: each returns None, or (key, what was expected)
     checks: tuple[Callable[[dict], tuple[str, str] | None], ...] = ()
+    upgrade: Callable[[dict, str, str], dict] | None = None
 
 
 @dataclass(frozen=True)
@@ -99,13 +103,57 @@ class Typed:
 
     @property
     def expected(self) -> str:
-        return f"one of {', '.join(self.types)} or module.path:ClassName"
+        return f"one of {', '.join(self.types)} or module.path:ClassName" if self.types else "module.path:ClassName"
 
     def type_field(self) -> Field:
-        return Field("str", self.default,
-                     doc=f"which {self.role}: {', '.join(self.types)} (built in) or module.path:ClassName, a class "
-                         "of your own imported when the file is loaded; the other keys are its constructor's keyword "
-                         "arguments, checked by its SCHEMA (a scenarios.schema.Schema) if it has one")
+        built_in = f"{', '.join(self.types)} (built in) or " if self.types else ""
+        return Field("str", self.default, required=not self.types,
+                     doc=f"which {self.role}: {built_in}module.path:ClassName, a class of your own imported when the "
+                         "file is loaded; the other keys are its constructor's keyword arguments, checked by its "
+                         "SCHEMA (a scenarios.schema.Schema) if it has one")
+
+
+def schema_of(cls: type) -> Schema:
+    """The parameters a part declares on its class (pipeline/tracking/params.py ``param``: dataclass fields with
+    their default, range and doc) as a Schema, with the class's ``CHECKS`` across them."""
+    fields = {}
+    for f in dataclasses.fields(cls):
+        declared = f.metadata.get("param")
+        if declared is not None:
+            fields[f.name] = _declared(f.default if f.default_factory is dataclasses.MISSING else f.default_factory(),
+                                       declared)
+    return Schema(fields, checks=tuple(getattr(cls, "CHECKS", ())))
+
+
+def _kind(value: Any) -> str:
+    return next(k for t, k in ((bool, "bool"), (int, "int"), (float, "float"), (str, "str")) if isinstance(value, t))
+
+
+def _declared(default: Any, p: dict) -> Field:
+    """The Field of one declared parameter (its kind that of its default)."""
+    if not isinstance(default, list):
+        return Field(_kind(default), default, min=p["min"], max=p["max"], exclusive_min=p["exclusive_min"],
+                     choices=p["choices"], doc=p["doc"])
+    if p["parts"] is not None:
+        item = Field(slot_typed(p["parts"]))
+    else:
+        limits = p["item"] or {}
+        item = Field(_kind(default[0]), min=limits.get("min"), max=limits.get("max"),
+                     exclusive_min=limits.get("exclusive_min", False), choices=limits.get("choices"))
+    return Field(ListOf(item, min_items=p["min_items"]), default, doc=p["doc"])
+
+
+def slot_typed(slot: Any) -> Typed:
+    """The Typed of a slot for a part (pipeline/tracking/params.py ``Slot``): its built-in types' declared
+    parameters, its default type (the first type where the slot's default is none), its methods."""
+    return Typed({name: schema_of(cls) for name, cls in slot.types.items()}, slot.default or next(iter(slot.types)),
+                 slot.role, slot.methods)
+
+
+def slot_field(slot: Any) -> Field:
+    """The Field of a slot for a part: left out, its default type with its defaults, or None where the slot's default
+    is none."""
+    return Field(slot_typed(slot), optional=slot.default is None, doc=slot.doc)
 
 
 CLASS_PATH = re.compile(r"[A-Za-z_][\w.]*:[A-Za-z_]\w*")
@@ -211,6 +259,8 @@ def validate(value: Any, spec: Any, source: str, key: str = "") -> Any:
         if not isinstance(value, dict):
             raise err(f"expected a mapping of keys, got {_describe(value)}")
         value = {k: v for k, v in value.items() if v is not REMOVE}  # ``!remove``: left out, the default applies
+        if spec.upgrade is not None:
+            value = spec.upgrade(value, source, key)
         unknown = [k for k in value if k not in spec.fields]
         if unknown:
             k = unknown[0]
@@ -287,6 +337,8 @@ def _validate_typed(value: Any, spec: Typed, source: str, key: str) -> dict:
         value = {}
     if not isinstance(value, dict):
         raise ScenarioError(source, key or "<top level>", f"expected a mapping of keys, got {_describe(value)}")
+    if "type" not in value and spec.default is None:
+        raise ScenarioError(source, where + "type", f"missing required key; expected {spec.expected}")
     name = value.get("type", spec.default)
     if not isinstance(name, str) or not (name in spec.types or CLASS_PATH.fullmatch(name)):
         raise ScenarioError(source, where + "type", f"expected {spec.expected}, got {_describe(name)}")
@@ -300,7 +352,7 @@ def _validate_typed(value: Any, spec: Typed, source: str, key: str) -> dict:
             _check_signature(cls, name, params, source, key)
             return {"type": name, **params}
     return validate(value, Schema({"type": spec.type_field(), **schema.fields}, schema.presets, schema.legacy,
-                                  schema.checks), source, key)
+                                  schema.checks, schema.upgrade), source, key)
 
 
 def _user_class(name: str, spec: Typed, source: str, key: str) -> type:

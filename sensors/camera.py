@@ -18,9 +18,11 @@ import mujoco
 import numpy as np
 
 from pipeline.camera_geometry import floor_homography, image_to_floor
+from pipeline.frames import inverse, rotation
 from pipeline.types import CameraFrame, DepthFrame
 
 from . import body, bodycast
+from .base import Periodic
 from .scene import LEG_GROUP, TORSO_GROUP, Scene
 
 MUJOCO_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])  # MuJoCo camera axes (x right, y up, z back) -> optical
@@ -285,7 +287,51 @@ def kinect_noise(depth: np.ndarray, rng: np.random.Generator, p: dict) -> np.nda
         return np.where(seen, fb / np.round(fb / noisy), np.inf).astype(np.float32)
 
 
-class DepthCamera:
+class CameraSensor(Periodic):
+    """What the two cameras share as ``Sensor``s (sensors/base.py): where the robot believes they are, and who has
+    the middle of their body in the image."""
+
+    name: str
+    scene: Scene
+    intrinsics: Intrinsics
+    p: dict
+
+    def pose_in_odom(self, world) -> np.ndarray:
+        """The optical frame in odom (a 4x4 transform), placed through the robot's localisation in the map (the true
+        world_T_odom, as the route driver steers by): for a camera on the robot, its mount on the odometry pose."""
+        origin, rot = camera_pose(self.scene, self.name)
+        odom_T_world = inverse(world.robot.world_T_odom)
+        odom_R_world = rotation(odom_T_world, 3)
+        pose = np.eye(4)
+        pose[:3, :3] = odom_R_world @ rot
+        pose[:3, 3] = odom_R_world @ origin + [*odom_T_world[:2], 0.0]
+        return pose
+
+    def shown(self, world, frame: DepthFrame | CameraFrame) -> tuple[np.ndarray, np.ndarray]:
+        """Each person's visible share, and whether the middle of their body (1 m up) is in the image within the
+        camera's range."""
+        agents = world.agents()
+        n = len(agents.id)
+        origin, rot = camera_pose(self.scene, self.name)
+        cam = (np.column_stack([agents.position, np.full(n, 1.0)]) - origin) @ rot
+        ahead = (cam[:, 2] > 0.05) & (cam[:, 2] <= self.p.get("range_max", np.inf))
+        size = self.intrinsics
+        uv = size.project(np.where(ahead[:, None], cam, [0.0, 0.0, 1.0]))
+        in_view = ahead & (uv >= 0).all(axis=1) & (uv[:, 0] < size.width) & (uv[:, 1] < size.height)
+        return on_persons(agents.id, frame.ids, frame.visible_fraction), in_view
+
+
+def on_persons(agent_ids: np.ndarray, ids: np.ndarray, values: np.ndarray, missing=0.0) -> np.ndarray:
+    """``values`` of persons ``ids`` laid out over ``agent_ids`` (sorted); ``missing`` for those not among them."""
+    out = np.full(len(agent_ids), missing, np.result_type(missing, np.asarray(values)))
+    rows = np.searchsorted(agent_ids, ids)
+    keep = rows < len(agent_ids)  # and, below, the person found there (nobody is found among no one)
+    keep[keep] = agent_ids[rows[keep]] == ids[keep]
+    out[rows[keep]] = np.asarray(values)[keep]
+    return out
+
+
+class DepthCamera(CameraSensor):
     """An RGB-D camera on the robot: z-depth with Kinect noise, a point cloud, segmentation, optional colour."""
 
     def __init__(self, params: dict, scene: Scene, rng: np.random.Generator):
@@ -304,7 +350,14 @@ class DepthCamera:
     def backend(self) -> str:
         return self.renderer.backend
 
-    def capture(self, stamp: float) -> DepthFrame:
+    def capture(self, world, stamp: float) -> DepthFrame:
+        """The image of ``world`` now, its pose in odom and its ground truth (``visibility``) filled in."""
+        self.scene.follow(world)
+        image = self.render(stamp)
+        image.pose = self.pose_in_odom(world)
+        return self.visibility(image)
+
+    def render(self, stamp: float) -> DepthFrame:
         """Render the scene as it was last synced."""
         out = self.renderer.render(self.name, depth=True, segmentation=True, rgb=self.p["rgb"])
         z = out["depth"]
@@ -327,7 +380,7 @@ class DepthCamera:
         return frame
 
 
-class WallCamera:
+class WallCamera(CameraSensor):
     """A fixed camera: RGB and segmentation, and for every person in view the visible box and visible fraction.
 
     The renderer draws the world without the people (walls, obstacles, the robot); the people are then ray-cast
@@ -367,7 +420,17 @@ class WallCamera:
         """Floor points [n, 2] in the world seen at image points ``uv`` [n, 2] (NaN above the horizon)."""
         return image_to_floor(self.camera_matrix, self.world_pose(), uv)
 
-    def capture(self, stamp: float) -> CameraFrame:
+    def capture(self, world, stamp: float) -> CameraFrame:
+        """The image of ``world`` now, with its pose in odom and the robot's odometry position (for a detector that
+        tells the robot from people)."""
+        self.scene.follow(world)
+        image = self.render(stamp)
+        image.pose = self.pose_in_odom(world)
+        image.robot_position = world.robot.odom_pose[:2].copy()
+        return image
+
+    def render(self, stamp: float) -> CameraFrame:
+        """Render the scene as it was last synced."""
         s, k = self.scene, self.intrinsics
         world = self.renderer.render(self.name, depth=True, segmentation=False, rgb=self.p["rgb"])
         slots = np.arange(s.alive)

@@ -11,11 +11,15 @@ import numpy as np
 from pipeline.frames import compose
 from pipeline.types import LaserScan
 
+from .base import Periodic
 from .scene import Scene
 
 
-class Laser:
-    """A planar laser mounted on the robot (``mount`` is its pose in base_link, ``height`` above the floor)."""
+class Laser(Periodic):
+    """A planar laser mounted on the robot (``mount`` is its pose in base_link, ``height`` above the floor); a
+    ``Sensor`` (sensors/base.py) whose ``batch``, when a ``LaserArray`` holds it, casts it with the others."""
+
+    batch = None
 
     def __init__(self, params: dict, scene: Scene, rng: np.random.Generator):
         self.p = params
@@ -47,6 +51,26 @@ class Laser:
     def pose_in(self, base_pose: np.ndarray) -> np.ndarray:
         """The laser's pose in the frame ``base_pose`` is given in."""
         return compose(base_pose, self.mount)
+
+    def capture(self, world, stamp: float) -> LaserScan:
+        self.scene.follow(world)
+        return self.scan(stamp, world.robot.pose)
+
+    def pose_in_odom(self, world) -> np.ndarray:
+        """Its mount on the odometry pose."""
+        return self.pose_in(world.robot.odom_pose)
+
+    def shown(self, world, scan: LaserScan) -> tuple[np.ndarray, np.ndarray]:
+        """The beams that hit each person, and who was within the field of view and range."""
+        agents = world.agents()
+        hit = np.searchsorted(agents.id, scan.person_id[scan.person_id >= 0])
+        beams = np.bincount(hit, minlength=len(agents.id)).astype(float)
+        pose = self.pose_in(world.robot.pose)
+        rel = agents.position - pose[:2]
+        bearing = np.arctan2(rel[:, 1], rel[:, 0]) - pose[2]
+        in_view = (np.linalg.norm(rel, axis=1) <= self.p["range_max"]) & (
+            np.abs(np.arctan2(np.sin(bearing), np.cos(bearing))) <= np.radians(self.p["fov_deg"]) / 2)
+        return beams, in_view
 
     def rays(self, robot_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The beams' common origin [3] and directions [n, 3] in the world, from the laser's true pose."""
@@ -89,6 +113,8 @@ class LaserArray:
 
     def __init__(self, lasers: list[Laser], scene: Scene, threads: int = 2):
         self.lasers, self.scene = lasers, scene
+        for laser in lasers:
+            laser.batch = self
         self.threads = max(1, threads)
         self._groups = np.max([laser._groups for laser in lasers], axis=0) if lasers else None
         self._version = None
@@ -109,6 +135,11 @@ class LaserArray:
         # the copies must follow what sync changes in the model: transparency (parked people), sizes and bounds
         self._fields = ("geom_rgba", "geom_size", "geom_pos", "geom_rbound", "geom_aabb")
         self._copies = [self.batch.expand(name) for name in self._fields]
+
+    def capture(self, lasers: list[Laser], world, stamp: float) -> list[LaserScan]:
+        """The scans of ``lasers`` (some of this array's) of ``world`` now."""
+        self.scene.follow(world)
+        return self.scan(stamp, world.robot.pose, [self.lasers.index(laser) for laser in lasers])
 
     def scan(self, stamp: float, robot_pose: np.ndarray, which: list[int]) -> list[LaserScan]:
         """Scans of the lasers ``which`` (indices) at the scene's current state."""

@@ -11,6 +11,8 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from pipeline.frames import optical_rotation
+
 from . import body
 
 WALL_HEIGHT = 2.5  # m
@@ -56,10 +58,8 @@ def _segment_boxes(segs: np.ndarray) -> str:
 def camera_xml(cam: dict) -> str:
     """A MuJoCo camera at ``position`` [x, y, z] looking along ``yaw`` and down by ``pitch`` (rad), in its parent's
     frame. MuJoCo's camera looks along its -z with y up: x = right, y = right x forward."""
-    yaw, pitch = cam["yaw"], cam["pitch"]
-    forward = np.array([np.cos(pitch) * np.cos(yaw), np.cos(pitch) * np.sin(yaw), -np.sin(pitch)])
-    right = np.array([np.sin(yaw), -np.cos(yaw), 0.0])
-    up = np.cross(right, forward)
+    optical = optical_rotation(cam["yaw"], cam["pitch"])  # columns: right, down, forward
+    right, up = optical[:, 0], -optical[:, 1]
     axes = " ".join(f"{v:.9f}" for v in (*right, *up))
     pos = " ".join(f"{v:.6f}" for v in cam["position"])
     return f'<camera name="{cam["name"]}" pos="{pos}" xyaxes="{axes}" fovy="{cam["fovy_deg"]}"/>'
@@ -103,6 +103,7 @@ class Scene:
         self.parts = set(parts)
         self._layout = (np.asarray(walls, float), robot_radius, tuple(robot_cameras), tuple(wall_cameras))
         self.version = 0  # counts the builds: whoever holds something made from the model remakes it on a change
+        self._synced_to = None  # (world, tick) of the last follow
         self._build(min(capacity, initial_capacity))
 
     def _build(self, capacity: int) -> None:
@@ -181,6 +182,15 @@ class Scene:
         self.data.mocap_pos[self._torso_mocap, 2] = PARKED_Z
         self.data.mocap_pos[self._leg_mocap.ravel(), 2] = PARKED_Z
         m.geom_rgba[self._all_person_geoms.ravel(), 3] = 0.0
+
+    def follow(self, world) -> None:
+        """Synced to ``world`` (sensors/base.py) at its current tick, once however many sensors capture then."""
+        if self._synced_to == (world, world.ticks):
+            return
+        agents = world.agents()
+        self.sync(world.robot.pose, agents.id, agents.position, agents.velocity, agents.walked,
+                  body.body_scale(agents.id, agents.radius))
+        self._synced_to = (world, world.ticks)
 
     def sync(self, robot_pose: np.ndarray, person_ids: np.ndarray, person_xy: np.ndarray,
              person_velocity: np.ndarray | None = None, person_walked: np.ndarray | None = None,

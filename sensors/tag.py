@@ -22,6 +22,8 @@ import numpy as np
 from pipeline.frames import inverse, transform_points, wrap_angle
 from pipeline.types import TagReading
 
+from .base import DUE_TOLERANCE
+
 TAG_DEFAULTS = {
     "rate": 5.0,  # Hz, an assumption (see above)
     "range_min": 0.5,  # m, seed 001 Sec. 3.2
@@ -47,13 +49,33 @@ class TagSensor:
             raise ValueError("tag sensor: range_sd and bearing_sd_deg must be >= 0, detection_probability in "
                              f"[0, 1]; got {p['range_sd']}, {p['bearing_sd_deg']}, {p['detection_probability']}")
         self.p, self.rng = p, rng
+        self.name = "tag"
         self.period = 1.0 / p["rate"]
         self.bearing_sd = float(np.radians(p["bearing_sd_deg"]))
         self._next: float | None = None
 
+    # as a Sensor (sensors/base.py): its own clock starts at its first read, and it has no detector nor visibility
+    def start(self, t: float) -> None:
+        pass
+
+    def due(self, stamp: float) -> bool:
+        return self._next is None or stamp >= self._next - DUE_TOLERANCE
+
+    def captured(self, stamp: float) -> None:
+        pass
+
+    def capture(self, world, stamp: float) -> TagReading | None:
+        return self.read(stamp, world.robot.pose, world.tagged_position())
+
+    def pose_in_odom(self, world) -> None:
+        return None
+
+    def shown(self, world, reading) -> None:
+        return None
+
     def read(self, stamp: float, robot_pose_world: np.ndarray, target_xy_world: np.ndarray | None) -> TagReading | None:
         """The reading due at ``stamp`` (None between reads, with no tagged person, out of coverage, or missed)."""
-        if self._next is not None and stamp < self._next - 1e-9:
+        if not self.due(stamp):
             return None
         self._next = (stamp if self._next is None else self._next) + self.period
         if self._next <= stamp:  # called after a pause: read at the rate from now on

@@ -3,7 +3,6 @@ classes below, named as ``test_assemble:...``: pytest puts tests/ on the path), 
 name, old files unchanged, and one clear error for every wrong part or parameter."""
 
 import inspect
-from dataclasses import asdict
 
 import numpy as np
 import pytest
@@ -17,14 +16,16 @@ from pipeline.assemble import (DETECTORS, FUSIONS, GROUP_STAGES, TRACKERS, Detec
 from pipeline.detectors.laser_segments import SegmentDetector
 from pipeline.fusion import NearestFusion
 from pipeline.frames import compose, inverse, transform_points
-from pipeline.tracking.nnt import NearestNeighbourTracker, TrackerParams
+from pipeline.tracking.deletion import FixedDeletion
+from pipeline.tracking.nnt import NearestNeighbourTracker
 from pipeline.tracking.rjmcmc import (TABLE1_CLUTTER, TABLE1_LIKELIHOOD, TABLE1_PROPOSALS, TABLE1_WEIGHTS,
                                       RjmcmcTracker)
 from pipeline.types import DetectedPersons, TrackedPersons
 from scenarios import ScenarioError, load_scenario, scenario_from_dict
 from scenarios.format import (COHERENT_MOTION, DETECTOR, DETECTOR_READS, DETECTOR_TYPES, FUSION, FUSION_TYPES,
-                              GROUP_STAGE, GROUP_STAGE_TYPES, NNT, TRACKER, TRACKER_TYPES)
+                              GROUP_STAGE, GROUP_STAGE_TYPES, TRACKER, TRACKER_TYPES)
 from scenarios.schema import Field, Schema
+from crowdsim.scoring import score_cycles
 
 
 class EchoTracker:
@@ -108,7 +109,6 @@ def test_the_format_and_assemble_name_the_same_types_with_the_same_defaults():
         for name, schema in types.items():
             signature = inspect.signature(classes[name]).parameters
             assert {k: f.default for k, f in schema.fields.items()} == {k: p.default for k, p in signature.items()}
-    assert {k: f.default for k, f in NNT.fields.items()} == asdict(TrackerParams())
     tables = {"weights": TABLE1_WEIGHTS, "clutter": TABLE1_CLUTTER, "proposal_sources": list(TABLE1_PROPOSALS),
               "likelihood_sources": list(TABLE1_LIKELIHOOD), "move_probabilities": [0.15, 0.8, 0.02, 0.03]}
     signature = {k: tables.get(k, p.default) for k, p in inspect.signature(RjmcmcTracker).parameters.items()}
@@ -131,14 +131,17 @@ def test_old_keys_give_todays_parts_and_the_resolved_section_reloads_equal(tmp_p
         "fusion": {"type": "nearest", "distance": 0.3},
         "map_filter": None,
         "groups": {"type": "coherent_motion", **{k: f.default for k, f in COHERENT_MOTION.fields.items()}},
-        "tracker": {"type": "nnt", **asdict(TrackerParams(n_delete=25))}}  # the NNT's defaults: test above
+        "tracker": {"type": "nnt", "motion": {"type": "cv", "process_noise": 0.267},  # its parts' defaults
+                    "association": {"type": "greedy", "gate_chi2": 13.82},
+                    "initiation": {"type": "none", "n_confirm": 3, "initial_velocity_variance": 1.0},
+                    "deletion": {"type": "fixed", "n_delete": 25, "tentative": 2}, "duplicates": None}}
     parts = build_pipeline(sc["pipeline"], ["front_laser", "rear_laser"])
     front, rear = parts.detectors["front_laser"], parts.detectors["rear_laser"]
     assert type(front) is type(rear) is SegmentDetector and front is not rear  # each laser its own ids
     assert (front.jump_distance, front.min_points) == (0.5, 3)
     assert type(parts.fusion) is NearestFusion and parts.fusion.distance == 0.3
     assert type(parts.tracker) is NearestNeighbourTracker and parts.tracker.frame == "odom"
-    assert parts.tracker.params == TrackerParams(n_delete=25)
+    assert parts.tracker.deletion == FixedDeletion(n_delete=25)
     # what `crowdsim run` writes as scenario.yaml loads to the same scenario
     again = load(tmp_path, _without_unset({k: v for k, v in sc.items() if k != "source"}))
     assert again == sc
@@ -156,7 +159,7 @@ def test_a_user_tracker_runs_in_the_loop_and_is_scored(tmp_path):
     for f in frames:
         np.testing.assert_array_equal(f.tracks.track_id, f.detections.detection_id + 1)
         np.testing.assert_array_equal(f.tracks.position, f.detections.position[:, :2] + [0.5, -0.25])
-    assert sim.clearmot.summary()["frames"] == 25
+    assert score_cycles(frames, sc["evaluation"]["threshold"]).frames == 25
     sim.reset(seed=5)
     assert sim.pipeline.tracker is tracker and tracker.resets == 2  # made once, started over
     # the run writes what it produced, and its scenario.yaml runs it again
@@ -290,7 +293,7 @@ def test_a_detectors_named_batches_reach_the_fusion_as_sensor_slash_name():
     ({"tracker": {"type": "nn"}}, "pipeline.tracker.type",
      ["expected one of nnt, mht, rjmcmc, rgbd or module.path:ClassName", "'nn'"]),
     ({"tracker": {"gate": 9.0}}, "pipeline.tracker.gate",
-     ["unknown key; expected one of: type, process_noise, gate_chi2, n_confirm"]),
+     ["unknown key; expected one of: type, motion, association, initiation, deletion, duplicates"]),
     ({"tracker": {"type": "test_assemble:EchoTracker", "gain": 2}}, "pipeline.tracker.gain",
      ["unknown key; expected one of: type, shift (the parameters of test_assemble:EchoTracker)"]),
     ({"tracker": {"type": "test_assemble:NeedsGain"}}, "pipeline.tracker",

@@ -43,7 +43,7 @@ def test_the_same_type_still_merges_key_by_key(tmp_path):
     base = load_scenario("airport_disembarkation")["pipeline"]["tracker"]
     text = "base: airport_disembarkation\npipeline:\n  tracker: {gate_chi2: 9.21}\n"
     sc = load_scenario(str(write(tmp_path, "g.yaml", text)))
-    assert sc["pipeline"]["tracker"] == {**base, "gate_chi2": 9.21}
+    assert sc["pipeline"]["tracker"] == {**base, "association": {**base["association"], "gate_chi2": 9.21}}
 
 
 def test_one_agent_type_tweaked_keeps_the_others(tmp_path):

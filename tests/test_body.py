@@ -173,7 +173,7 @@ def test_a_childs_head_is_lower_in_the_depth_image():
            "height": 120, "rate": 15.0, "range_min": 0.5, "range_max": 8.0, "noise": "none", "rgb": False}
     scene = Scene(np.array(FAR_WALL), 0.425, 1, robot_cameras=[cam])
     scene.sync(np.array([0.0, 0.0, 0.0]), np.array([3]), np.array([[4.0, 0.0]]), person_scale=np.array([0.72]))
-    frame = DepthCamera(cam, scene, np.random.default_rng(0)).capture(0.0)
+    frame = DepthCamera(cam, scene, np.random.default_rng(0)).render(0.0)
     rows = np.flatnonzero((frame.person_id == 3).any(axis=1))
     k = Intrinsics(160, 120, 43.0)
     top = body.HEIGHT * 0.72

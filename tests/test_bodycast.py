@@ -59,7 +59,7 @@ def test_a_wall_camera_shows_people_in_their_colours_and_not_through_walls(rende
         monkeypatch.setenv("MUJOCO_GL", "disable")
     camera = WallCamera(CAM, scene)
     assert isinstance(camera.renderer, GLRenderer if renderer == "gl" else RaycastRenderer)
-    frame = camera.capture(0.0)
+    frame = camera.render(0.0)
     assert list(frame.ids) == [2]
     assert (frame.person_id == 1).sum() == 0 and (frame.person_id == 2).sum() > 500
     origin, rot = camera_pose(scene, CAM["name"])

@@ -45,7 +45,7 @@ def test_depth_of_a_known_plane_and_of_the_floor(renderer):
         camera.renderer = RaycastRenderer(scene, camera.intrinsics, scene.robot_body)
     else:
         assert isinstance(camera.renderer, GLRenderer), "no GL context here: the raycast case covers the fallback"
-    frame = camera.capture(0.0)
+    frame = camera.render(0.0)
     expect = expected_depth(cam)
     expect = np.where((expect >= 0.5) & (expect <= 8.0), expect, np.nan)
     # rows on either side of the wall's foot and top may differ by the rasterization of one edge: compare the rest
@@ -64,7 +64,7 @@ def test_depth_of_a_known_plane_and_of_the_floor(renderer):
 def test_point_cloud_lies_on_the_wall():
     scene, cam = depth_scene()
     scene.sync(np.zeros(3), np.zeros(0, np.int64), np.zeros((0, 2)))
-    frame = DepthCamera(cam, scene, np.random.default_rng(0)).capture(0.0)
+    frame = DepthCamera(cam, scene, np.random.default_rng(0)).render(0.0)
     origin, rot = camera_pose(scene, cam["name"])
     world = frame.points @ rot.T + origin
     on_wall = np.abs(world[:, 0] - 4.95) < 1e-3
@@ -81,7 +81,7 @@ def test_kinect_noise_has_the_configured_sigma_and_disparity_steps(sigma, subpix
     scene, cam = depth_scene(noise="kinect", range_max=20.0, noise_sigma=sigma, disparity_subpixel=subpixel)
     assert (cam["ir_focal_px"], cam["ir_baseline"]) == (580.0, 0.075)
     scene.sync(np.zeros(3), np.zeros(0, np.int64), np.zeros((0, 2)))
-    frame = DepthCamera(cam, scene, np.random.default_rng(3)).capture(0.0)
+    frame = DepthCamera(cam, scene, np.random.default_rng(3)).render(0.0)
     wall = np.abs(expected_depth(cam) - 4.5) < 1e-9
     z = frame.depth[wall & np.isfinite(frame.depth)]
     steps = subpixel * 580.0 * 0.075 / z
@@ -96,7 +96,7 @@ def test_wall_camera_box_of_a_person_is_its_projection_within_a_pixel():
     # pixels equals the box around the projection of the body's surface (torso cylinder, head sphere, legs)
     scene = Scene(np.array(WALL_X) * 3, 0.425, 2, wall_cameras=[WALL_CAM])
     scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([4]), np.array([[6.0, 0.5]]))
-    frame = WallCamera(WALL_CAM, scene).capture(0.0)
+    frame = WallCamera(WALL_CAM, scene).render(0.0)
     assert list(frame.ids) == [4]
     origin, rot = camera_pose(scene, WALL_CAM["name"])
     a = np.linspace(0, 2 * np.pi, 720)
@@ -120,13 +120,13 @@ def test_visible_fraction_of_a_half_hidden_person():
     cam = dict(WALL_CAM, pitch=0.0, position=[0.0, 0.0, 1.0])
     scene = Scene(np.array(WALL_X) * 3, 0.425, 2, wall_cameras=[cam])
     scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1, 2]), np.array([[6.0, 0.78], [8.0, 0.85]]))
-    frame = WallCamera(cam, scene).capture(0.0)
+    frame = WallCamera(cam, scene).render(0.0)
     fraction = dict(zip(frame.ids.tolist(), frame.visible_fraction))
     assert fraction[1] == pytest.approx(1.0, abs=0.03)
     assert 0.2 < fraction[2] < 0.8
     # hidden entirely: person 2 right behind person 1 on the camera's line of sight
     scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1, 2]), np.array([[6.0, 0.0], [9.0, 0.0]]))
-    frame = WallCamera(cam, scene).capture(0.0)
+    frame = WallCamera(cam, scene).render(0.0)
     assert 2 not in frame.ids or dict(zip(frame.ids.tolist(), frame.visible_fraction))[2] < 0.05
 
 
@@ -137,7 +137,7 @@ def test_segmentation_agrees_with_laser_hits():
     xy = np.stack([rng.uniform(1.5, 7.5, 14), rng.uniform(-2.5, 2.5, 14)], 1)
     scene, cam = depth_scene(capacity=14, position=[0.0, 0.0, 0.70], range_max=20.0)
     scene.sync(np.zeros(3), np.arange(14), xy)
-    frame = DepthCamera(cam, scene, np.random.default_rng(0)).capture(0.0)
+    frame = DepthCamera(cam, scene, np.random.default_rng(0)).render(0.0)
     laser = Laser(validate({"name": "l", "mount": [0.0, 0.0, 0.0], "fov_deg": 56.0, "resolution_deg": 0.25,
                             "noise": []}, LASER, "<test>"), scene, np.random.default_rng(0))
     scan = laser.scan(0.0, np.zeros(3))
@@ -162,7 +162,7 @@ def test_wall_camera_calibration_maps_the_image_to_the_floor():
     np.testing.assert_allclose(camera.image_to_ground(uv), floor, atol=1e-9)
     # the person's feet: the lowest visible pixel row of their box, mid-column, lands within 10 cm of their
     # position's near side (the camera 30 degrees down sees the front of the feet)
-    frame = camera.capture(0.0)
+    frame = camera.render(0.0)
     u0, v0, u1, v1 = frame.boxes[0]
     feet = camera.image_to_ground(np.array([[(u0 + u1) / 2, v1]]))[0]
     assert np.hypot(*(feet - [6.0 - body.LEG_RADIUS, 0.5])) < 0.1
@@ -177,7 +177,7 @@ def test_a_head_height_depth_camera_sees_the_floor_and_the_heads():
     scene = Scene(np.array(WALL_X) * 3, 0.425, 1, robot_cameras=[cam])
     scene.sync(np.zeros(3), np.array([9]), np.array([[3.5, 0.0]]))
     camera = DepthCamera(cam, scene, np.random.default_rng(0))
-    frame = camera.capture(0.0)
+    frame = camera.render(0.0)
     origin, rot = camera_pose(scene, cam["name"])
     valid = np.isfinite(frame.depth)
     world = frame.points @ rot.T + origin
@@ -197,7 +197,7 @@ def test_without_gl_the_cameras_fall_back_to_ray_casting_and_say_so(monkeypatch)
     monkeypatch.setenv("MUJOCO_GL", "disable")
     camera = DepthCamera(cam, scene, np.random.default_rng(0))
     assert camera.backend == "raycast"
-    frame = camera.capture(0.0)
+    frame = camera.render(0.0)
     wall = np.abs(expected_depth(cam) - 4.5) < 1e-9
     np.testing.assert_allclose(frame.depth[wall], 4.5, atol=1e-6)
     assert WallCamera(WALL_CAM, Scene(np.array(WALL_X), 0.425, 1, wall_cameras=[WALL_CAM])).backend == "raycast"
@@ -215,9 +215,9 @@ def test_walls_out_of_view_are_left_out_without_changing_the_image():
     renderer = camera.renderer
     culled = renderer._walls[renderer._frustum(cam["name"], renderer._wall_corners)]
     assert 0 < len(culled) < len(renderer._walls)
-    culled_frame = camera.capture(0.0)
+    culled_frame = camera.render(0.0)
     renderer._walls, renderer._wall_corners = renderer._walls[:0], renderer._wall_corners[:0]  # draw every wall
-    full_frame = camera.capture(0.0)
+    full_frame = camera.render(0.0)
     np.testing.assert_array_equal(culled_frame.depth, full_frame.depth)
     np.testing.assert_array_equal(culled_frame.person_id, full_frame.person_id)
 
@@ -240,11 +240,11 @@ def test_a_scene_grown_for_more_people_sees_what_a_big_one_does():
         lasers = LaserArray([Laser(validate({"name": "l", "mount": [0, 0, 0], "noise": []}, LASER, "<test>"),
                                    scene, np.random.default_rng(0))], scene)
         depth, wall = DepthCamera(DEPTH, scene, np.random.default_rng(0)), WallCamera(wall_cam, scene)
-        before = (lasers.scan(0.0, np.zeros(3), [0])[0].ranges, depth.capture(0.0).depth, wall.capture(0.0).rgb)
+        before = (lasers.scan(0.0, np.zeros(3), [0])[0].ranges, depth.render(0.0).depth, wall.render(0.0).rgb)
         scene.sync(np.zeros(3), np.arange(50), xy, vel, walked)
         assert scene.capacity == (60 if initial == 60 else 50)
         scan = lasers.scan(0.0, np.zeros(3), [0])[0]
-        d, w = depth.capture(0.0), wall.capture(0.0)
+        d, w = depth.render(0.0), wall.render(0.0)
         out.append((before, scan.ranges, scan.person_id, d.depth, d.person_id, w.rgb, w.person_id, w.boxes))
     for a, b in zip(*out):
         for x, y in zip(a, b) if isinstance(a, tuple) else [(a, b)]:
@@ -262,8 +262,8 @@ def test_a_renderer_freed_leaves_the_others_images_alone():
         return WallCamera(dict(WALL_CAM, rgb=True), scene)
 
     first = camera()
-    image = first.capture(0.0).rgb
+    image = first.render(0.0).rgb
     second = camera()
     del first
     gc.collect()
-    np.testing.assert_array_equal(second.capture(0.0).rgb, image)
+    np.testing.assert_array_equal(second.render(0.0).rgb, image)

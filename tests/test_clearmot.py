@@ -31,12 +31,12 @@ def test_perfect_tracking_two_people_three_frames():
         np.testing.assert_array_equal(r.matched_gt_ids, [1, 2])
         np.testing.assert_array_equal(r.matched_hyp_ids, [10, 20])
         np.testing.assert_allclose(r.distances, [0.1, 0.3], atol=1e-12)
-    s = cm.summary()
+    s = cm.result()
     # 6 matches, distances 3 * (0.1 + 0.3) = 1.2 -> MOTP 1.2 / 6 = 0.2; no errors -> MOTA 1.
-    assert s["mota"] == 1.0
-    assert s["motp_m"] == pytest.approx(0.2, abs=1e-12)
-    assert (s["gt"], s["matches"], s["fp"], s["fn"], s["id_switches"], s["frames"]) == (6, 6, 0, 0, 0, 3)
-    assert s["fp_rate"] == 0.0 and s["miss_rate"] == 0.0
+    assert s.mota == 1.0
+    assert s.motp_m == pytest.approx(0.2, abs=1e-12)
+    assert (s.gt, s.matches, s.fp, s.fn, s.id_switches, s.frames) == (6, 6, 0, 0, 0, 3)
+    assert s.fp_rate == 0.0 and s.miss_rate == 0.0
 
 
 def test_false_positive():
@@ -44,10 +44,10 @@ def test_false_positive():
     step(cm, ([1], [(0, 0)]), ([7], [(0, 0)]))
     r = step(cm, ([1], [(0, 0)]), ([7, 8], [(0, 0), (50, 0)]))
     assert (r.fp, r.fn, r.matches) == (1, 0, 1)
-    s = cm.summary()
+    s = cm.result()
     # gt 2, fp 1 -> MOTA = 1 - 1/2 = 0.5, fp_rate 0.5.
-    assert s["fp"] == 1 and s["gt"] == 2
-    assert s["mota"] == 0.5 and s["fp_rate"] == 0.5 and s["miss_rate"] == 0.0
+    assert s.fp == 1 and s.gt == 2
+    assert s.mota == 0.5 and s.fp_rate == 0.5 and s.miss_rate == 0.0
 
 
 def test_miss():
@@ -56,12 +56,12 @@ def test_miss():
     r = step(cm, ([1], [(0, 0)]), ([], []))
     assert (r.fn, r.fp, r.matches) == (1, 0, 0)
     step(cm, ([1], [(0, 0)]), ([7], [(0.2, 0)]))  # same hyp again: no switch
-    s = cm.summary()
+    s = cm.result()
     # gt 3, fn 1 -> MOTA = 1 - 1/3 = 2/3; MOTP = (0.2 + 0.2) / 2.
-    assert (s["fn"], s["id_switches"], s["gt"]) == (1, 0, 3)
-    assert s["mota"] == pytest.approx(2 / 3, abs=1e-15)
-    assert s["miss_rate"] == pytest.approx(1 / 3, abs=1e-15)
-    assert s["motp_m"] == pytest.approx(0.2, abs=1e-15)
+    assert (s.fn, s.id_switches, s.gt) == (1, 0, 3)
+    assert s.mota == pytest.approx(2 / 3, abs=1e-15)
+    assert s.miss_rate == pytest.approx(1 / 3, abs=1e-15)
+    assert s.motp_m == pytest.approx(0.2, abs=1e-15)
 
 
 def test_id_switch():
@@ -70,10 +70,10 @@ def test_id_switch():
     assert step(cm, ([1], [(1, 0)]), ([1], [(1, 0)])).id_switches == 0
     r = step(cm, ([1], [(2, 0)]), ([2], [(2, 0)]))
     assert r.id_switches == 1 and r.matched_hyp_ids.tolist() == [2]
-    s = cm.summary()
+    s = cm.result()
     # gt 3, ids 1 -> MOTA = 1 - 1/3 = 2/3.
-    assert (s["id_switches"], s["fp"], s["fn"], s["gt"]) == (1, 0, 0, 3)
-    assert s["mota"] == pytest.approx(2 / 3, abs=1e-15)
+    assert (s.id_switches, s.fp, s.fn, s.gt) == (1, 0, 0, 3)
+    assert s.mota == pytest.approx(2 / 3, abs=1e-15)
 
 
 def test_two_tracks_swap_identities():
@@ -84,7 +84,7 @@ def test_two_tracks_swap_identities():
     assert r.id_switches == 2
     np.testing.assert_array_equal(r.matched_hyp_ids, [20, 10])
     # gt 4, ids 2 -> MOTA 0.5.
-    assert cm.summary()["mota"] == 0.5
+    assert cm.result().mota == 0.5
 
 
 def test_correspondence_kept_although_nearer_track_appears():
@@ -93,10 +93,10 @@ def test_correspondence_kept_although_nearer_track_appears():
     r = step(cm, ([1], [(0, 0)]), ([1, 2], [(0.6, 0), (0.05, 0)]))
     assert r.matched_hyp_ids.tolist() == [1]
     assert (r.id_switches, r.fp, r.fn) == (0, 1, 0)
-    s = cm.summary()
+    s = cm.result()
     # gt 2, fp 1 -> MOTA 0.5; MOTP (0.5 + 0.6) / 2 = 0.55.
-    assert s["mota"] == 0.5
-    assert s["motp_m"] == pytest.approx(0.55, abs=1e-15)
+    assert s.mota == 0.5
+    assert s.motp_m == pytest.approx(0.55, abs=1e-15)
     # Control: without the history, the nearer hyp 2 wins.
     assert step(ClearMot(), ([1], [(0, 0)]), ([1, 2], [(0.6, 0), (0.05, 0)])).matched_hyp_ids.tolist() == [2]
 
@@ -111,7 +111,7 @@ def test_hungarian_beats_greedy_on_total_distance():
     np.testing.assert_array_equal(r.matched_gt_ids, [1, 2])
     np.testing.assert_array_equal(r.matched_hyp_ids, [20, 10])
     np.testing.assert_allclose(r.distances, [1.0, 1.1], atol=1e-12)
-    assert cm.summary()["motp_m"] == pytest.approx(1.05, abs=1e-12)
+    assert cm.result().motp_m == pytest.approx(1.05, abs=1e-12)
 
 
 def test_hungarian_maximises_matches_within_threshold():
@@ -128,9 +128,9 @@ def test_over_threshold_is_not_a_match_and_threshold_is_inclusive():
     cm = ClearMot(threshold=1.0)
     r = step(cm, ([1], [(0, 0)]), ([1], [(1.2, 0)]))
     assert (r.matches, r.fp, r.fn) == (0, 1, 1)
-    s = cm.summary()
+    s = cm.result()
     # gt 1, fp 1, fn 1 -> MOTA = 1 - 2/1 = -1; no matches -> MOTP None.
-    assert s["mota"] == -1.0 and s["motp_m"] is None
+    assert s.mota == -1.0 and s.motp_m is None
     # Exactly at the threshold is a match (inclusive), for a new pair ...
     r = step(ClearMot(1.0), ([1], [(0, 0)]), ([1], [(1.0, 0)]))
     assert r.matches == 1 and r.distances.tolist() == [1.0]
@@ -147,10 +147,10 @@ def test_id_switch_after_gap():
     assert step(cm, ([1], [(0, 0)]), ([], [])).fn == 1
     r = step(cm, ([1], [(0, 0)]), ([3], [(0.1, 0)]))
     assert r.id_switches == 1  # last known correspondence (hyp 1) persists over the gap
-    s = cm.summary()
+    s = cm.result()
     # gt 3, fn 1, ids 1 -> MOTA = 1 - 2/3 = 1/3.
-    assert (s["fn"], s["id_switches"]) == (1, 1)
-    assert s["mota"] == pytest.approx(1 / 3, abs=1e-15)
+    assert (s.fn, s.id_switches) == (1, 1)
+    assert s.mota == pytest.approx(1 / 3, abs=1e-15)
 
 
 def test_step1_keeps_only_previous_frame_correspondences():
@@ -169,23 +169,23 @@ def test_empty_frames():
     assert isinstance(r, FrameResult)
     assert (r.gt, r.matches, r.fp, r.fn, r.id_switches) == (0, 0, 0, 0, 0)
     assert r.matched_gt_ids.shape == (0,) and r.distances.shape == (0,)
-    s = cm.summary()
-    assert s["mota"] is None and s["motp_m"] is None and s["fp_rate"] is None and s["miss_rate"] is None
-    assert s["frames"] == 1 and s["gt"] == 0
+    s = cm.result()
+    assert s.mota is None and s.motp_m is None and s.fp_rate is None and s.miss_rate is None
+    assert s.frames == 1 and s.gt == 0
     r = step(cm, ([1, 2], [(0, 0), (1, 1)]), ([], []))  # gt only
     assert (r.gt, r.fn, r.fp) == (2, 2, 0)
     r = step(cm, ([], []), ([4, 5, 6], [(0, 0), (1, 1), (2, 2)]))  # hyps only
     assert (r.gt, r.fn, r.fp) == (0, 0, 3)
-    s = cm.summary()
+    s = cm.result()
     # gt 2, fn 2, fp 3 -> MOTA = 1 - 5/2 = -1.5.
-    assert (s["gt"], s["fn"], s["fp"], s["matches"], s["frames"]) == (2, 2, 3, 0, 3)
-    assert s["mota"] == -1.5 and s["fp_rate"] == 1.5 and s["miss_rate"] == 1.0
+    assert (s.gt, s.fn, s.fp, s.matches, s.frames) == (2, 2, 3, 0, 3)
+    assert s.mota == -1.5 and s.fp_rate == 1.5 and s.miss_rate == 1.0
 
 
-def test_summary_is_plain_json():
+def test_result_is_plain_json_as_a_dict():
     cm = ClearMot()
     step(cm, ([1, 2], [(0, 0), (3, 0)]), ([1], [(0.25, 0)]))
-    s = cm.summary()
+    s = cm.result().as_dict()
     assert set(s) == SUMMARY_KEYS
     assert json.loads(json.dumps(s)) == s
     for k in ("fp", "fn", "id_switches", "id_swaps", "reinitialisations", "gt", "matches", "mt", "pt", "ml",
@@ -247,11 +247,11 @@ def test_a_swap_between_two_tracked_people_is_counted_apart_from_a_reinitialisat
     # frame 3: person 1 is lost; frame 4: a new track 30 picks them up: a re-initialisation
     step(cm, ([1, 2], [a, b]), ([10], [b]))
     step(cm, ([1, 2], [a, b]), ([10, 30], [b, a]))
-    s = cm.summary()
-    assert (s["id_switches"], s["id_swaps"], s["reinitialisations"]) == (3, 2, 1)
+    s = cm.result()
+    assert (s.id_switches, s.id_swaps, s.reinitialisations) == (3, 2, 1)
     # gt 8, tp 7 (frame 3 misses 1), IDS 3 -> rIDS = 3 * 8 / 7; seed 001's TSR = 7 / 8, MR = 1 / 8, GR = 0
-    assert s["rids"] == pytest.approx(24 / 7, abs=1e-12)
-    assert (s["tsr"], s["miss_rate"], s["fp_rate"]) == (7 / 8, 1 / 8, 0.0)
+    assert s.rids == pytest.approx(24 / 7, abs=1e-12)
+    assert (s.tsr, s.miss_rate, s.fp_rate) == (7 / 8, 1 / 8, 0.0)
 
 
 def test_an_occluded_person_matched_by_a_track_is_neither_a_false_positive_nor_a_miss():
@@ -269,10 +269,10 @@ def test_an_occluded_person_matched_by_a_track_is_neither_a_false_positive_nor_a
     # visible again, picked up by track 11: an ID switch (their last counted correspondence was 10)
     r = step(cm, ([1], [a]), ([11], [(0.3, 0.0)]))
     assert (r.matches, r.id_switches) == (1, 1)
-    s = cm.summary()
+    s = cm.result()
     # counted: frames 1 and 5, both matched; MOTP (0.1 + 0.3) / 2; one FP; MOTA 1 - (1 + 0 + 1) / 2
-    assert (s["gt"], s["matches"], s["fp"], s["fn"]) == (2, 2, 1, 0)
-    assert s["motp_m"] == pytest.approx(0.2, abs=1e-12) and s["mota"] == 0.0
+    assert (s.gt, s.matches, s.fp, s.fn) == (2, 2, 1, 0)
+    assert s.motp_m == pytest.approx(0.2, abs=1e-12) and s.mota == 0.0
 
 
 def test_mostly_tracked_and_mostly_lost_at_their_boundaries():
@@ -284,8 +284,8 @@ def test_mostly_tracked_and_mostly_lost_at_their_boundaries():
         gt = [(k + 1, (10.0 * k, 0.0)) for k in range(5)]
         hyp = [(100 + k, (10.0 * k, 0.0)) for k, n in enumerate(matched_in) if t < n]
         step(cm, ([g[0] for g in gt], [g[1] for g in gt]), ([h[0] for h in hyp], [h[1] for h in hyp]))
-    s = cm.summary()
-    assert (s["mt"], s["pt"], s["ml"], s["persons"]) == (1, 2, 2, 5)
+    s = cm.result()
+    assert (s.mt, s.pt, s.ml, s.persons) == (1, 2, 2, 5)
 
 
 def test_fragmentations_count_interrupted_and_resumed_runs():
@@ -296,7 +296,7 @@ def test_fragmentations_count_interrupted_and_resumed_runs():
     for flag in seen:
         hyp = ([10], [(0.0, 0.0)]) if flag else ([], [])
         cm.update(*frame([1], [(0.0, 0.0)]), *frame(*hyp), gt_ignore=np.array([flag is None]))
-    assert cm.summary()["fragmentations"] == 2
+    assert cm.result().fragmentations == 2
 
 
 def test_idf1_assigns_identities_over_the_whole_sequence():
@@ -309,10 +309,10 @@ def test_idf1_assigns_identities_over_the_whole_sequence():
     step(cm, ([1, 2], [a, b]), ([10, 20], [a, b]))
     step(cm, ([1], [a]), ([10], [a]))
     step(cm, ([1], [a]), ([20], [a]))
-    s = cm.summary()
-    assert s["idtp"] == 5
-    assert s["idf1"] == pytest.approx(10 / 12, abs=1e-12)
-    assert s["idp"] == pytest.approx(5 / 6, abs=1e-12) and s["idr"] == pytest.approx(5 / 6, abs=1e-12)
+    s = cm.result()
+    assert s.idtp == 5
+    assert s.idf1 == pytest.approx(10 / 12, abs=1e-12)
+    assert s.idp == pytest.approx(5 / 6, abs=1e-12) and s.idr == pytest.approx(5 / 6, abs=1e-12)
 
 
 def test_evaluate_on_sequences_equals_stepping_frame_by_frame_and_breaks_correspondences_at_empty_frames():
@@ -333,7 +333,7 @@ def test_evaluate_on_sequences_equals_stepping_frame_by_frame_and_breaks_corresp
     g, h = np.array(gt_rows), np.array(hyp_rows)
     got = evaluate(Sequence.from_rows(g[:, 0], g[:, 1], g[:, 2:4], ignore=g[:, 4] > 0),
                    Sequence.from_rows(h[:, 0], h[:, 1], h[:, 2:4]), 0.5)
-    expect = cm.summary()
+    expect = cm.result().as_dict()
     expect["frames"] = len(np.unique(np.concatenate([g[:, 0], h[:, 0]])))  # frames with any row
     assert got == expect
     # person 1 matched by track 10 in frames 0 and 2 with frame 1 empty: the correspondence is not kept across the
@@ -355,7 +355,7 @@ def test_image_boxes_match_at_iou_half_and_motp_is_the_mean_of_one_minus_iou():
     cm = ClearMot(0.5)
     result = cm.update_dissimilarity(np.array([1, 2]), np.array([7, 8]), 1 - box_iou(people, tracks))
     assert (result.matches, result.fn, result.fp) == (1, 1, 1)
-    s = cm.summary()
-    assert s["motp_m"] == pytest.approx(0.4) and s["mota"] == pytest.approx(0.0)  # mean IoU of the matches: 0.6
+    s = cm.result()
+    assert s.motp_m == pytest.approx(0.4) and s.mota == pytest.approx(0.0)  # mean IoU of the matches: 0.6
     with pytest.raises(ValueError, match=r"dissimilarity must be \[2, 2\], got \[2, 1\]"):
         cm.update_dissimilarity(np.array([1, 2]), np.array([7, 8]), np.zeros((2, 1)))

@@ -13,7 +13,8 @@ import pytest
 
 from crowdsim.cli import main
 from crowdsim.outdir import RunDirError
-from crowdsim.run import CSV_HEADER, GT_HEADER, run
+from crowdsim.run import run
+from evaluation.columns import GROUNDTRUTH, TRACKS
 from scenarios import bundled_scenarios, load_scenario
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -189,12 +190,12 @@ def test_short_run_writes_a_complete_run_directory(tmp_path, capsys):
     assert metrics["cameras"] == {} and "Cameras" not in captured.out
     assert metrics["tracking"]["gt"] > 0
 
-    for name, header in (("groundtruth.csv", GT_HEADER), ("tracks.csv", CSV_HEADER)):
-        lines = (out / name).read_text().splitlines()
-        assert lines[0] == header
-        assert all(len(row.split(",")) == header.count(",") + 1 for row in lines[1:])
-    assert GT_HEADER == ("frame,t,id,x,y,vx,vy,range,in_range,beams,visible,visible_seed000,group")
-    assert CSV_HEADER == "frame,t,id,x,y,vx,vy"
+    for columns in (GROUNDTRUTH, TRACKS):
+        lines = (out / columns.file).read_text().splitlines()
+        assert lines[0] == columns.header
+        assert all(len(row.split(",")) == len(columns) for row in lines[1:])
+    assert GROUNDTRUTH.header == "frame,t,id,x,y,vx,vy,range,in_range,beams,visible,visible_seed000,group"
+    assert TRACKS.header == "frame,t,id,x,y,vx,vy"
     gt_rows = [[float(v) for v in r.split(",")] for r in (out / "groundtruth.csv").read_text().splitlines()[1:]]
     # visible is 1 exactly where at least one beam hit the person; in_range where within the 20 m range
     assert all((r[9] > 0) == (r[10] == 1) and (r[7] <= 20.0) == (r[8] == 1) for r in gt_rows)
@@ -285,7 +286,7 @@ def test_run_into_an_existing_empty_dir_is_allowed(tmp_path, capsys):
 @pytest.mark.parametrize("exc", [RuntimeError("boom"), KeyboardInterrupt()], ids=["error", "interrupt"])
 def test_failed_run_leaves_nothing_half_written(tmp_path, monkeypatch, exc):
     def fail_midway(scenario, tmp, rrd, progress):
-        (tmp / "groundtruth.csv").write_text(CSV_HEADER + "\n")  # something half-written
+        (tmp / "groundtruth.csv").write_text(TRACKS.header + "\n")  # something half-written
         raise exc
 
     monkeypatch.setattr("crowdsim.run._simulate", fail_midway)

@@ -10,6 +10,7 @@ from crowdsim.experiments.recorded import detect, record, track
 from crowdsim.experiments.table2 import ROWS, SCENARIO, WALKING, claims, replay, seed000_pipeline
 from crowdsim.loop import Simulation
 from scenarios import load_scenario
+from crowdsim.scoring import score_cycles
 
 
 def test_the_recorded_scans_replayed_through_the_airports_pipeline_score_what_the_run_scored():
@@ -18,13 +19,13 @@ def test_the_recorded_scans_replayed_through_the_airports_pipeline_score_what_th
     sim = Simulation(scenario)
     sim.reset(3)
     sim.warm_up()
-    n = sum(1 for _ in sim.frames(4.0))
-    assert len(cycles) == n == 100  # 4 s of 25 Hz cycles
-    run = sim.clearmot.summary()
+    frames = list(sim.frames(4.0))
+    assert len(cycles) == len(frames) == 100  # 4 s of 25 Hz cycles
+    run = score_cycles(frames, scenario["evaluation"]["threshold"])
     detections = detect(cycles, scenario["pipeline"], scenario["map"])
     replayed = replay(cycles, detections, dict(scenario["pipeline"]["tracker"]))["all"]
-    assert replayed["mota"] == pytest.approx(100 * run["mota"], abs=1e-12)
-    assert replayed["ids"] == run["id_switches"] and replayed["hz"] > 0
+    assert replayed["mota"] == pytest.approx(100 * run.mota, abs=1e-12)
+    assert replayed["ids"] == run.id_switches and replayed["hz"] > 0
     # seed 000's detector in the airport's place: its own detections, fused and map-filtered as the run's
     seed000 = detect(cycles, seed000_pipeline(scenario), scenario["map"])
     assert sum(map(len, seed000)) != sum(map(len, detections))
@@ -54,8 +55,8 @@ def test_the_walking_evaluation_leaves_out_exactly_the_standing_persons():
     evaluations = {"all": 0.0, "walking": WALKING}
     for walkers_only in (False, True):
         s, _ = track(cycles, [None] * len(cycles), Oracle(walkers_only), 1.0, evaluations)
-        assert s["walking"]["fn"] == s["walking"]["fp"] == 0 == s["all"]["fp"]
-        assert s["all"]["fn"] == (standing if walkers_only else 0)
+        assert s["walking"].fn == s["walking"].fp == 0 == s["all"].fp
+        assert s["all"].fn == (standing if walkers_only else 0)
 
 
 def table(**rows) -> np.ndarray:

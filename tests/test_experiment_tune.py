@@ -10,6 +10,7 @@ import yaml
 from crowdsim.experiments.tune import SCENARIO, Recorded, suggest, tune
 from crowdsim.loop import Simulation
 from scenarios import load_scenario
+from crowdsim.scoring import score_cycles
 
 
 def test_recorded_mota_is_the_runs_own():
@@ -17,9 +18,8 @@ def test_recorded_mota_is_the_runs_own():
     sim = Simulation(load_scenario(SCENARIO, duration=3.0))
     sim.reset(5)
     sim.warm_up()
-    for _ in sim.frames(3.0):
-        pass
-    assert recorded.mota(None) == pytest.approx(100 * sim.clearmot.summary()["mota"], abs=1e-12)
+    run = score_cycles(sim.frames(3.0), sim.scenario["evaluation"]["threshold"])
+    assert recorded.mota(None) == pytest.approx(100 * run.mota, abs=1e-12)
 
 
 def test_a_study_resumes_and_writes_a_scenario_of_its_best_trial(tmp_path):
@@ -35,7 +35,7 @@ def test_a_study_resumes_and_writes_a_scenario_of_its_best_trial(tmp_path):
     best = yaml.safe_load((tmp_path / "b" / "best.yaml").read_text())
     assert best["base"] == SCENARIO and best["pipeline"] == suggest(optuna.trial.FixedTrial(study.best_params))
     scenario = load_scenario(str(tmp_path / "b" / "best.yaml"))
-    assert scenario["pipeline"]["tracker"]["association"] == best["pipeline"]["tracker"]["association"]
+    assert scenario["pipeline"]["tracker"]["association"]["type"] == best["pipeline"]["tracker"]["association"]
     # the held-out figure is the best pipeline's MOTA on the held-out seed, measured again here
     held_out = Recorded([200], 2.0)
     assert second["held_out_mota_best"] == held_out.mota(best["pipeline"])

@@ -4,11 +4,13 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from crowdsim.loop import GT_MARGIN, Simulation
+from crowdsim.groundtruth import GT_MARGIN
+from crowdsim.loop import Simulation
 from crowdsim.run import run
 from pipeline.frames import compose, inverse, transform_points, wrap_angle
 from scenarios import load_scenario
 from scenarios.geometry import closest_on_segments, line_of_sight
+from crowdsim.scoring import score_cycles
 
 
 def airport(duration=4.0, warmup=20.0, seed=1):
@@ -65,16 +67,16 @@ def test_tracking_frame_and_score_are_consistent():
     assert f.tracks.frame == f.groundtruth.frame == f.detections.frame == "odom"
     # perfect odometry: odom stays where the robot started
     assert np.allclose(f.world_T_odom, sim.scenario["robot"]["start"])
-    summary = sim.clearmot.summary()
-    assert summary["frames"] == 75
+    summary = score_cycles(frames, sim.scenario["evaluation"]["threshold"])
+    assert summary.frames == 75
     # the ground truth that counts: in range and hit by a beam
-    assert summary["gt"] == sum(int((~fr.gt_tags.ignore).sum()) for fr in frames)
+    assert summary.gt == sum(int((~fr.gt_tags.ignore).sum()) for fr in frames)
     # every track is a match, a false positive, or matched to an ignored person (within the threshold of one)
     ignored = 0
     for fr in frames:
         d = np.linalg.norm(fr.tracks.position[:, None] - fr.groundtruth.position[None, fr.gt_tags.ignore], axis=2)
         ignored += int((d <= 1.0).any(axis=1).sum()) if d.size else 0
-    free = summary["fp"] + summary["matches"]
+    free = summary.fp + summary.matches
     assert free <= sum(len(fr.tracks) for fr in frames) <= free + ignored
 
 

@@ -14,7 +14,8 @@ import pytest
 
 from crowdsim.loop import Simulation
 from crowdsim.navigate import episode_metrics
-from crowdsim.run import EXACT, PERSONS_FORMAT, PERSONS_HEADER, CsvWriter, run
+from crowdsim.run import EXACT, PERSONS_FORMAT, CsvWriter, run
+from evaluation.columns import PERSONS
 from evaluation.navigation import navigation_metrics, read_nav_run
 from evaluation.navigation_report import json_safe
 from scenarios import load_scenario
@@ -55,7 +56,7 @@ def test_exact_columns_read_back_as_the_same_floats(tmp_path):
     rows = np.column_stack([np.arange(n), np.cumsum(np.full(n, 0.04)) + 10.0, rng.integers(0, 99, n),
                             rng.normal(size=(n, 4)) * 10.0 ** rng.integers(-300, 300, (n, 4)), np.full(n, 0.25)])
     rows[:5, 3] = [-0.0, 0.1 + 0.2, 5e-324, 1.7976931348623157e308, 1.5008]
-    writer = CsvWriter(tmp_path / "persons.csv", PERSONS_HEADER, PERSONS_FORMAT)
+    writer = CsvWriter(tmp_path, PERSONS, PERSONS_FORMAT)
     writer.write(rows[:100])
     writer.write(rows[100:])
     writer.close()

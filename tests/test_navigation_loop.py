@@ -144,7 +144,7 @@ def test_goals_driver_reaches_its_goals_in_an_empty_room_within_the_robot_limits
                 assert frame.goal.tolist() in data["robot"]["goals"]
         if sim.finished:
             break
-    assert sim.finished and sim.goal_index == 2
+    assert sim.finished and sim.driver.goal_index == 2
     assert np.hypot(*(sim.robot.pose[:2] - [10.5, 4.0])) <= p["goal_radius"]
     assert sim.collision_ticks == 0 and sim.first_collision is None
     assert 15 < stamps[-1] < 30  # 10 m at 0.6 m/s at best

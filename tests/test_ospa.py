@@ -17,8 +17,8 @@ KEYS = {"ospa", "localisation", "cardinality", "ospa_t", "frames", "labelled_tra
 def track_labels(gt, tracks):
     """OSPA-T's step 1 alone: (track ids, their labels, whether labelled)."""
     o = Ospa()
-    o.count(gt, tracks)
-    o.label()
+    o.add(gt, tracks)
+    o.next_pass()
     return o.track_labels()
 
 

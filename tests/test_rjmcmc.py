@@ -171,11 +171,11 @@ def test_two_crossing_people_followed_without_a_swap(seed):
         result = score.update(np.array([1, 2]), np.array([a, b]), tracks.track_id, tracks.position)
         for person, track in zip(result.matched_gt_ids, result.matched_hyp_ids):
             followed[int(person)].append(int(track))
-    s = score.summary()
-    assert s["id_swaps"] == 0  # no track went from one of them to the other
+    s = score.result()
+    assert s.id_swaps == 0  # no track went from one of them to the other
     assert set(followed[1]).isdisjoint(followed[2])
-    assert s["tsr"] >= 0.85  # both tracked from the second frame on, but for a frame or two
-    assert s["fp"] <= 0.1 * s["gt"]  # a passing duplicate at most
+    assert s.tsr >= 0.85  # both tracked from the second frame on, but for a frame or two
+    assert s.fp <= 0.1 * s.gt  # a passing duplicate at most
 
 
 def test_colour_models_follow_close_histograms_and_a_returning_person_gets_their_id():

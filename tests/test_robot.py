@@ -91,29 +91,3 @@ def test_noisy_odometry_drifts_and_world_T_odom_tracks_it():
     c, s = np.cos(w[2]), np.sin(w[2])
     mapped = w[:2] + np.array([[c, -s], [s, c]]) @ robot.odom_pose[:2]
     assert mapped == pytest.approx(robot.pose[:2], abs=1e-9)
-
-
-def test_route_driver_reaches_waypoints_and_stops_for_obstacles():
-    robot = Robot(params(route=[[5.0, 0.0], [5.0, 5.0]], loop=False), np.random.default_rng(0))
-    assert robot.drive_command(front_clearance=0.3) == (0.0, 0.0)  # something 0.3 m ahead: stand still
-    for _ in range(2000):
-        v, w = robot.drive_command(front_clearance=np.inf)
-        robot.step(v, w, 0.04)
-    assert np.linalg.norm(robot.pose[:2] - [5.0, 5.0]) < 0.5
-    assert robot.drive_command(front_clearance=np.inf) == (0.0, 0.0)  # route done, no loop
-
-
-def test_the_script_driver_holds_each_command_in_turn():
-    # seed 003's KTP motions: 2 s translating at 0.15 m/s, 2 s rotating at 0.11 rad/s, then standing (no loop);
-    # acceleration limits high enough to change speed within a step
-    robot = Robot(params(driver="script", script=[[2.0, 0.15, 0.0], [2.0, 0.0, 0.11]], loop=False,
-                         max_acceleration=100.0, max_angular_acceleration=100.0), np.random.default_rng(0))
-    dt = 0.04
-    for _ in range(150):  # 6 s
-        robot.step(*robot.script_command(), dt)
-    np.testing.assert_allclose(robot.pose, [0.30, 0.0, 0.22], atol=1e-9)
-    assert robot.script_command() == (0.0, 0.0) and robot.clock == pytest.approx(6.0)
-    looping = Robot(params(driver="script", script=[[1.0, 0.1, 0.0], [1.0, -0.1, 0.0]], loop=True),
-                    np.random.default_rng(0))
-    looping.clock = 2.5  # back in the first row
-    assert looping.script_command() == (0.1, 0.0)

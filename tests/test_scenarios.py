@@ -426,7 +426,7 @@ def test_defaults_are_filled(tmp_path):
     assert (laser["height"], laser["fov_deg"], laser["resolution_deg"], laser["range_max"], laser["rate"]) == (
         0.70, 190.0, 0.5, 20.0, 25.0)
     assert sc["pipeline"]["detector"]["jump_distance"] == 0.4
-    assert sc["pipeline"]["tracker"]["n_delete"] == 5  # seed 000 Sec. V-C, the base NNT
+    assert sc["pipeline"]["tracker"]["deletion"]["n_delete"] == 5  # seed 000 Sec. V-C, the base NNT
 
 
 def test_partial_section_keeps_other_defaults(tmp_path):

@@ -16,7 +16,7 @@ def test_id_swaps_count_a_pair_once_per_frame():
     where = np.array([[0.0, 0.0], [2.0, 0.0]])
     swaps.update(score.update(people, where, np.array([10, 20]), where))
     swaps.update(score.update(people, where, np.array([20, 10]), where))  # the two tracks trade persons
-    assert swaps.count == 1 and score.summary()["id_switches"] == 2  # CLEAR-MOT counts each person's switch
+    assert swaps.count == 1 and score.result().id_switches == 2  # CLEAR-MOT counts each person's switch
     swaps.update(score.update(people, where, np.array([30, 10]), where))  # person 1 gets a new track: no swap
     assert swaps.count == 1
     swaps.update(score.update(people, where, np.array([10, 20]), where))  # 1 takes 2's track; 2 takes a track 1 had

@@ -98,9 +98,9 @@ def test_state_grows_with_persons_and_tracks_not_with_frames():
         cm, h, o = ClearMot(), Hota(), Ospa()
         for frame in range(frames):
             cm.update(ids[:3], xy[:3], ids[:3] + 10, xy[:3] + 0.1)
-        assert cm.summary()["mt"] == 3
-        h.count(gt, tracks)
-        o.count(gt, tracks)
+        assert cm.result().mt == 3
+        h.add(gt, tracks)
+        o.add(gt, tracks)
         return (len(cm._persons), len(cm._pairs), len(h.gt_ids), len(h.pairs), len(o.together),
                 o.sums["ospa"].count, len(o.sums["ospa"]._partials) <= 2)
 

@@ -6,8 +6,9 @@ import pytest
 from evaluation import ClearMot
 from pipeline.tracking.association import WINDOWS_FROM, gated_mahalanobis, greedy_assign, mahalanobis
 from pipeline.tracking.imm import kalman_update
-from pipeline.tracking.motion import ConstantVelocity, state_layout
-from pipeline.tracking.nnt import NearestNeighbourTracker, TrackerParams
+from pipeline.tracking.initiation import CountInitiation
+from pipeline.tracking.motion import ConstantVelocity
+from pipeline.tracking.nnt import NearestNeighbourTracker
 from pipeline.types import DetectedPersons
 
 DT = 0.04  # 25 Hz
@@ -28,7 +29,7 @@ def dets(stamp, xy, sigma=0.05, frame="odom", first_id=0):
 
 def cv(q):
     """The CV model (seed 000 Eq. 1-2) on the tracker's default state [x, y, vx, vy]."""
-    return ConstantVelocity(state_layout(["cv"]), q)
+    return ConstantVelocity(q)
 
 
 def run(tracker, truth, rng, sigma):
@@ -160,7 +161,7 @@ def test_single_walker_velocity_converges_with_one_id():
     # walker) the velocity at 2 s is within 0.1 m/s (over seeds 0-499 the worst axis error was 0.039 m/s).
     t = np.arange(51) * DT  # 0 .. 2.0 s
     truth = np.stack([1.2 * t, np.full_like(t, 3.0)], axis=1)[:, None, :]
-    outs = run(NearestNeighbourTracker(process_noise=0.001), truth, np.random.default_rng(7), 0.02)
+    outs = run(NearestNeighbourTracker(motion=cv(0.001)), truth, np.random.default_rng(7), 0.02)
     last = outs[-1]
     assert len(last) == 1
     assert np.abs(last.velocity[0] - [1.2, 0.0]).max() < 0.1
@@ -219,7 +220,7 @@ def test_two_people_crossing_keep_their_ids():
 
 @pytest.mark.parametrize("n_confirm", [1, 3, 5])
 def test_initiation_after_n_confirm_detections(n_confirm):
-    trk = NearestNeighbourTracker(n_confirm=n_confirm)
+    trk = NearestNeighbourTracker(initiation=CountInitiation(n_confirm))
     for k in range(n_confirm - 1):
         out = trk.update(k * DT, dets(k * DT, [[1.0, 2.0]], first_id=k))
         assert len(out) == 0  # seen k + 1 < n_confirm times: tentative only
@@ -244,18 +245,18 @@ def test_ids_are_consecutive_over_confirmed_tracks_only():
 
 def test_confirmed_track_deleted_after_n_delete_misses():
     trk = NearestNeighbourTracker()
-    p = trk.params
-    assert p.n_delete == 5
+    n_delete = trk.deletion.n_delete
+    assert n_delete == 5
     for k in range(3):
         out = trk.update(k * DT, dets(k * DT, [[1.0, 2.0]], first_id=k))
     assert out.track_id.tolist() == [1]
-    for miss in range(1, p.n_delete):
+    for miss in range(1, n_delete):
         stamp = (2 + miss) * DT
         out = trk.update(stamp, DetectedPersons.empty(stamp, "odom", "laser"))
         assert out.track_id.tolist() == [1], miss
         assert out.is_occluded.tolist() == [True] and out.is_matched.tolist() == [False]
         assert out.detection_id.tolist() == [-1]
-    stamp = (2 + p.n_delete) * DT
+    stamp = (2 + n_delete) * DT
     out = trk.update(stamp, DetectedPersons.empty(stamp, "odom", "laser"))
     assert len(out) == 0 and trk.num_tracks == 0
 
@@ -272,7 +273,7 @@ def test_occluded_track_is_recovered_with_its_id():
 
 
 def test_tentative_track_survives_one_miss_and_dies_after_two():
-    trk = NearestNeighbourTracker()  # n_delete_tentative = 2, n_confirm = 3
+    trk = NearestNeighbourTracker()  # tentative = 2 misses, n_confirm = 3
     trk.update(0.0, dets(0.0, [[0.0, 0.0]]))
     trk.update(DT, DetectedPersons.empty(DT, "odom", "laser"))
     assert trk.num_tracks == 1
@@ -372,16 +373,8 @@ def test_crowd_of_thirty_is_tracked_well():
     for k in range(500):
         out = trk.update(k * DT, dets(k * DT, meas[k], first_id=30 * k))
         cm.update(gid, truth[k], out.track_id, out.position)
-    s = cm.summary()
-    assert s["mota"] > 0.99
-    assert s["id_switches"] <= 5
-    assert 60 <= s["fn"] <= 65
-    assert s["motp_m"] < 0.06
-
-
-def test_scenario_schema_defaults_are_the_tracker_defaults():
-    from dataclasses import asdict
-
-    from scenarios.format import NNT
-
-    assert {k: f.default for k, f in NNT.fields.items()} == asdict(TrackerParams())
+    s = cm.result()
+    assert s.mota > 0.99
+    assert s.id_switches <= 5
+    assert 60 <= s.fn <= 65
+    assert s.motp_m < 0.06

@@ -47,11 +47,12 @@ def test_the_tracker_drops_a_track_that_multi_association_drove_onto_a_neighbour
     """Two people walk side by side 0.4 m apart; person B's detections stop (B hidden for good at cycle 30). With
     NN with multiple associations, B's track takes A's detections and follows A for ever: two tracks on one person.
     With SPENCER's duplicate deletion it goes once the two have been within 0.15 m for 7 of 10 cycles."""
+    from pipeline.tracking.association import MultiNN
     from pipeline.tracking.nnt import NearestNeighbourTracker
     from pipeline.types import DetectedPersons
 
-    def run(**kw):
-        tracker = NearestNeighbourTracker(association="multi", n_delete=5, **kw)
+    def run(duplicates=None):
+        tracker = NearestNeighbourTracker(association=MultiNN(), duplicates=duplicates)
         counts = []
         for k in range(120):
             xy = [(0.05 * k, 0.0)] + ([(0.05 * k, 0.4)] if k < 30 else [])
@@ -65,7 +66,7 @@ def test_the_tracker_drops_a_track_that_multi_association_drove_onto_a_neighbour
             counts.append(len(out.track_id))
         return counts
 
-    plain, guarded = run(), run(duplicate_distance=0.15)
+    plain, guarded = run(), run(DuplicateGuard(clearance=0.0))
     assert plain[25] == guarded[25] == 2
     assert plain[-1] == 2  # B's track rides on A's detections
     assert guarded[-1] == 1

@@ -4,14 +4,16 @@ the IMM, each on hand-worked numbers; and the default tracker unchanged."""
 import numpy as np
 import pytest
 
-from pipeline.tracking.association import global_assign, greedy_assign, multi_assign
+from pipeline.tracking.association import ASSOCIATIONS, GreedyNN, global_assign, greedy_assign, multi_assign
+from pipeline.tracking.deletion import FixedDeletion, YoungMatureDeletion
 from pipeline.tracking.imm import IMM
-from pipeline.tracking.motion import CoordinatedTurn, make_model, state_layout
-from pipeline.tracking.nnt import NearestNeighbourTracker, TrackColumns, TrackerParams, bench_cycles, bench_detections
+from pipeline.tracking.initiation import INITIATIONS, BaseInitiation, CountInitiation, ExtendedInitiation
+from pipeline.tracking.motion import (MODELS, Brownian, ConstantAcceleration, ConstantVelocity, CoordinatedTurn,
+                                      state_layout)
+from pipeline.tracking.nnt import NearestNeighbourTracker, TrackColumns, bench_cycles, bench_detections
 from test_tracker import dets
 
 DT = 0.04  # 25 Hz
-CV4 = state_layout(["cv"])  # ("x", "y", "vx", "vy")
 
 
 def feed(tracker, xys, sigma=0.05):
@@ -68,7 +70,7 @@ def test_multi_association_lets_a_lost_track_take_its_neighbours_detection():
     # two people walking side by side 0.3 m apart; the second is no longer detected after 1 s. With greedy NN its
     # track coasts (unmatched); with multi-association it takes the first person's detection (seed 000 Sec. V-A).
     def run(association):
-        trk = NearestNeighbourTracker(association=association, n_delete=50)
+        trk = NearestNeighbourTracker(association=ASSOCIATIONS[association](), deletion=FixedDeletion(50))
         for k in range(60):
             a, b = [1.0 * k * DT, 0.0], [1.0 * k * DT, 0.3]
             out = trk.update(k * DT, dets(k * DT, [a, b] if k < 25 else [a], first_id=2 * k))
@@ -91,7 +93,7 @@ def test_multi_association_lets_a_lost_track_take_its_neighbours_detection():
 def test_a_standing_person_is_never_confirmed_by_the_velocity_gate(initiation):
     # the same position every cycle: 0 m moved in 0.04 s, under v_min dt = 0.2 * 0.04 = 0.008 m. Every detection
     # starts a new candidate, which dies after n_delete_tentative = 2 misses; none reaches n_min = 6.
-    trk = NearestNeighbourTracker(initiation=initiation)
+    trk = NearestNeighbourTracker(initiation=INITIATIONS[initiation]())
     outs = feed(trk, [[1.0, 2.0]] * 100)
     assert all(len(o) == 0 for o in outs)
     assert trk.num_tracks == 2  # this cycle's candidate and the previous one (missed once)
@@ -102,7 +104,7 @@ def test_a_standing_person_is_never_confirmed_by_the_velocity_gate(initiation):
 @pytest.mark.parametrize("initiation", ["base", "extended"])
 def test_a_walker_is_confirmed_at_the_n_min_th_detection(initiation):
     # 1.0 m/s along x: 0.04 m per cycle, within [0.2, 2] m/s; j cycles back, 0.04 j m within [0.008 j, 0.08 j + 0.1]
-    trk = NearestNeighbourTracker(initiation=initiation)
+    trk = NearestNeighbourTracker(initiation=INITIATIONS[initiation]())
     outs = feed(trk, [[1.0 * k * DT, 0.0] for k in range(10)])
     assert [len(o) for o in outs] == [0, 0, 0, 0, 0, 1, 1, 1, 1, 1]  # n_min = 6 (seed 000 Sec. V-B)
     assert outs[5].track_id.tolist() == [1] and outs[5].detection_id.tolist() == [5]
@@ -113,8 +115,9 @@ def test_too_fast_a_candidate_is_not_confirmed():
     # 2.5 m/s: 0.1 m per cycle, beyond v_max dt = 0.08 m once the slack is 0; with the default 0.1 m slack the
     # latest step passes (0.1 <= 0.18) and the base logic confirms at the sixth detection
     track = [[2.5 * k * DT, 0.0] for k in range(10)]
-    assert all(len(o) == 0 for o in feed(NearestNeighbourTracker(initiation="base", position_slack=0.0), track))
-    assert len(feed(NearestNeighbourTracker(initiation="base"), track)[5]) == 1
+    assert all(len(o) == 0 for o in feed(NearestNeighbourTracker(initiation=BaseInitiation(position_slack=0.0)),
+                                         track))
+    assert len(feed(NearestNeighbourTracker(initiation=BaseInitiation()), track)[5]) == 1
 
 
 def test_the_extended_gate_rejects_a_zigzag_that_the_base_gate_accepts():
@@ -122,16 +125,17 @@ def test_the_extended_gate_rejects_a_zigzag_that_the_base_gate_accepts():
     # [v_min dt, v_max dt + slack] = [0.008, 0.18] m: the base gate accepts. Two cycles apart it has moved 0 m,
     # under v_min * 0.08 = 0.016 m: the extended gate rejects the third detection, and every later candidate alike.
     zigzag = [[3.0, 0.1 * (k % 2)] for k in range(40)]
-    base = feed(NearestNeighbourTracker(initiation="base"), zigzag, sigma=0.1)
+    base = feed(NearestNeighbourTracker(initiation=BaseInitiation()), zigzag, sigma=0.1)
     assert [len(o) for o in base[:7]] == [0, 0, 0, 0, 0, 1, 1]
-    assert all(len(o) == 0 for o in feed(NearestNeighbourTracker(initiation="extended"), zigzag, sigma=0.1))
+    assert all(len(o) == 0 for o in feed(NearestNeighbourTracker(initiation=ExtendedInitiation()), zigzag,
+                                         sigma=0.1))
 
 
 def test_a_candidate_survives_one_missed_cycle():
     # Alg. 1's n_miss,max: a candidate of a walker missing once (n_delete_tentative = 2) still collects its six
     walk = [[1.0 * k * DT, 0.0] for k in range(10)]
     walk[3] = None
-    outs = feed(NearestNeighbourTracker(initiation="extended"), walk)
+    outs = feed(NearestNeighbourTracker(initiation=ExtendedInitiation()), walk)
     assert [len(o) for o in outs] == [0, 0, 0, 0, 0, 0, 1, 1, 1, 1]  # the sixth detection comes at cycle 6
 
 
@@ -144,7 +148,7 @@ def test_a_candidate_survives_one_missed_cycle():
 def test_young_and_mature_tracks_are_deleted_after_20_and_50_misses(hits, kept):
     # confirmed at the third detection (initiation none); `hits` detections make it mature from 100 on (n^mat); then
     # it coasts: shown for n_del - 1 misses, gone at the n_del-th (young 20, mature 50: seed 000 Sec. V-C)
-    trk = NearestNeighbourTracker(deletion="young_mature")
+    trk = NearestNeighbourTracker(deletion=YoungMatureDeletion())
     outs = feed(trk, [[1.0, 2.0]] * hits + [None] * 60)
     coasting = [len(o) for o in outs[hits:]]
     assert coasting == [1] * kept + [0] * (60 - kept)
@@ -167,7 +171,8 @@ def test_coordinated_turn_predicts_along_the_arc_exactly():
     # dt = 0.5 s turns by 0.375 rad, dt = 3 s by 2.25 rad; the prediction lies on the circle at the new angle.
     layout = state_layout(["ct"])
     assert layout == ("x", "y", "vx", "vy", "w")
-    ct = CoordinatedTurn(layout, 0.0, 0.0)
+    ct = CoordinatedTurn(0.0, 0.0)
+    assert ct.layout == layout
     r, v, a0, c = 2.0, 1.5, 0.3, np.array([1.0, -1.0])
     w = v / r
     x = np.array([[c[0] + r * np.cos(a0), c[1] + r * np.sin(a0), -v * np.sin(a0), v * np.cos(a0), w]])
@@ -187,7 +192,7 @@ def test_coordinated_turn_predicts_along_the_arc_exactly():
 def test_coordinated_turn_covariance_uses_its_jacobian():
     # P+ = J P J^T + Q with J the Jacobian of the arc motion; compared with central differences of the prediction
     layout = state_layout(["ct"])
-    ct = CoordinatedTurn(layout, 0.2, 0.5)
+    ct = CoordinatedTurn(0.2, 0.5, layout=layout)
     x = np.array([[1.0, 2.0, 1.1, -0.4, 0.6]])
     dt, h = 0.4, 1e-6
 
@@ -197,7 +202,7 @@ def test_coordinated_turn_covariance_uses_its_jacobian():
     J = np.stack([(f(x + h * e) - f(x - h * e)) / (2 * h) for e in np.eye(5)[:, None]], 1)
     A = np.arange(25.0).reshape(5, 5) / 25
     P = A @ A.T + np.eye(5)
-    Q = make_model("cv", layout, 0.2, 0.0).matrices(dt)[1]
+    Q = ConstantVelocity(0.2, layout=layout).matrices(dt)[1]
     Q[4, 4] = 0.5 * dt  # turn-rate noise q_turn dt
     np.testing.assert_allclose(ct.predict(x, P[None], dt)[1][0], J @ P @ J.T + Q, atol=1e-7)
 
@@ -206,20 +211,20 @@ def test_constant_acceleration_and_brownian_models():
     layout = state_layout(["cv", "ca"])
     assert layout == ("x", "y", "vx", "vy", "ax", "ay")
     # CA: x + v dt + a dt^2 / 2 exactly: from (1, 2) at (0.5, -1) m/s, accelerating (0.2, 0.4) m/s^2, for 2 s
-    ca = make_model("ca", layout, 0.0, 0.0)
+    ca = ConstantAcceleration(0.0, layout=layout)
     x, _ = ca.predict(np.array([[1.0, 2.0, 0.5, -1.0, 0.2, 0.4]]), np.zeros((1, 6, 6)), 2.0)
     np.testing.assert_allclose(x[0], [1 + 1 + 0.4, 2 - 2 + 0.8, 0.5 + 0.4, -1 + 0.8, 0.2, 0.4])
     # its jerk noise (q = 3, dt = 1): per axis q [[1/20, 1/8, 1/6], [1/8, 1/3, 1/2], [1/6, 1/2, 1]]
-    Q = make_model("ca", layout, 3.0, 0.0).matrices(1.0)[1]
+    Q = ConstantAcceleration(3.0, layout=layout).matrices(1.0)[1]
     np.testing.assert_allclose(Q[np.ix_([0, 2, 4], [0, 2, 4])], 3 * np.array([[1 / 20, 1 / 8, 1 / 6],
                                                                               [1 / 8, 1 / 3, 1 / 2],
                                                                               [1 / 6, 1 / 2, 1.0]]))
     # CV in this layout: a CV person does not accelerate (acceleration 0, its variance 0)
-    x, P = make_model("cv", layout, 0.1, 0.0).predict(np.array([[0, 0, 1.0, 0, 0.3, 0.3]]), np.eye(6)[None], 1.0)
+    x, P = ConstantVelocity(0.1, layout=layout).predict(np.array([[0, 0, 1.0, 0, 0.3, 0.3]]), np.eye(6)[None], 1.0)
     np.testing.assert_allclose(x[0], [1, 0, 1, 0, 0, 0])
     assert P[0, 4:, :].max() == 0 and P[0, :, 4:].max() == 0
     # Brownian (q = 0.5 m^2/s, 2 s): the position stays, its variance grows by q dt = 1; the velocity is 0
-    x, P = make_model("brownian", CV4, 0.5, 0.0).predict(np.array([[3.0, 4.0, 1.0, 1.0]]), np.eye(4)[None], 2.0)
+    x, P = Brownian(0.5).predict(np.array([[3.0, 4.0, 1.0, 1.0]]), np.eye(4)[None], 2.0)
     np.testing.assert_allclose(x[0], [3, 4, 0, 0])
     np.testing.assert_allclose(P[0], np.diag([2.0, 2.0, 0.0, 0.0]))
 
@@ -229,7 +234,7 @@ def test_each_motion_model_tracks_a_walker(motion):
     # straight at 1.2 m/s, sigma 0.02 m: one track, near the walker (Brownian's velocity is 0 by definition)
     rng = np.random.default_rng(4)
     walk = [[1.2 * k * DT + 0.02 * rng.standard_normal(), 0.02 * rng.standard_normal()] for k in range(75)]
-    outs = feed(NearestNeighbourTracker(motion=motion, process_noise=0.5), walk, sigma=0.02)
+    outs = feed(NearestNeighbourTracker(motion=MODELS[motion](0.5)), walk, sigma=0.02)
     assert np.unique(np.concatenate([o.track_id for o in outs])).tolist() == [1]
     assert np.abs(outs[-1].position[0] - [1.2 * 74 * DT, 0.0]).max() < 0.1
     speed = np.linalg.norm(outs[-1].velocity[0])
@@ -243,8 +248,7 @@ def test_each_motion_model_tracks_a_walker(motion):
 
 def table2_imm():
     """Table II's IMM: CV with q = 0.035 and CV with q = 0.267, stay probability 0.95."""
-    return IMM([make_model("cv", CV4, 0.035, 0.0), make_model("cv", CV4, 0.267, 0.0)],
-               np.array([[0.95, 0.05], [0.05, 0.95]]))
+    return IMM([ConstantVelocity(0.035), ConstantVelocity(0.267)], np.array([[0.95, 0.05], [0.05, 0.95]]))
 
 
 def one_track(xs, Ps, mu):
@@ -254,8 +258,7 @@ def one_track(xs, Ps, mu):
 
 
 def test_imm_mixing_and_mode_update_hand_worked():
-    imm = IMM([make_model("cv", CV4, 0.0, 0.0), make_model("cv", CV4, 0.0, 0.0)], np.array([[0.95, 0.05],
-                                                                                           [0.05, 0.95]]))
+    imm = IMM([ConstantVelocity(0.0), ConstantVelocity(0.0)], np.array([[0.95, 0.05], [0.05, 0.95]]))
     # mu = (0.8, 0.2): c = (0.8 * 0.95 + 0.2 * 0.05, 0.8 * 0.05 + 0.2 * 0.95) = (0.77, 0.23). Model 0 walks at 1 m/s
     # along x, model 1 stands. Mixed velocity for model 0: 0.76 / 0.77 = 0.987013; for model 1: 0.04 / 0.23 =
     # 0.173913; one second later (noise-free CV) each model's x is its mixed velocity.
@@ -306,7 +309,7 @@ def test_imm_mode_probability_moves_to_the_manoeuvre_model_in_a_turn():
 def test_the_tracker_with_table2_imm_hands_out_the_mixed_estimate():
     rng = np.random.default_rng(2)
     walk = [[1.0 * k * DT + 0.03 * rng.standard_normal(), 0.5 + 0.03 * rng.standard_normal()] for k in range(60)]
-    trk = NearestNeighbourTracker(motion="imm")
+    trk = NearestNeighbourTracker(motion=IMM())
     outs = feed(trk, walk, sigma=0.03)
     assert np.unique(np.concatenate([o.track_id for o in outs])).tolist() == [1]
     xc, Pc = trk._filter.estimate(trk._t)  # tracks last
@@ -317,10 +320,10 @@ def test_the_tracker_with_table2_imm_hands_out_the_mixed_estimate():
 
 def test_an_imm_over_cv_and_ct_runs_in_the_shared_state():
     # CV and CT together: the state holds the turn rate, 0 under CV; the output is still position and velocity
-    trk = NearestNeighbourTracker(motion="imm", imm_models=[{"model": "cv", "process_noise": 0.1},
-                                                            {"model": "ct", "process_noise": 0.1}])
+    trk = NearestNeighbourTracker(motion=IMM([ConstantVelocity(0.1), CoordinatedTurn(0.1)]))
     assert trk._filter.layout == ("x", "y", "vx", "vy", "w")
-    assert trk.params.imm_models[1] == {"model": "ct", "process_noise": 0.1, "turn_rate_noise": 1.0}
+    assert [m.layout for m in trk._filter.models] == [trk._filter.layout] * 2  # both moved onto the shared state
+    assert trk._filter.models[1].turn_rate_noise == 1.0
     outs = feed(trk, [[np.sin(0.5 * k * DT), 1 - np.cos(0.5 * k * DT)] for k in range(100)], sigma=0.02)
     assert len(outs[-1]) == 1 and outs[-1].velocity.shape == (1, 2)
 
@@ -328,21 +331,6 @@ def test_an_imm_over_cv_and_ct_runs_in_the_shared_state():
 # ---------------------------------------------------------------------------------------------------------------
 # Configuration and the default tracker
 # ---------------------------------------------------------------------------------------------------------------
-
-
-@pytest.mark.parametrize("bad, match", [
-    ({"association": "hungarian"}, "association must be one of greedy, global, multi"),
-    ({"initiation": "smart"}, "initiation must be one of none, base, extended"),
-    ({"motion": "imm", "imm_transition": [0.9, 0.1, 0.1]}, "imm_transition must be the 2 x 2 Markov matrix"),
-    ({"imm_transition": [0.9, 0.2, 0.1, 0.9]}, "each row of 2 summing to 1"),
-    ({"imm_transition": [1.0, 0.0, 1.0, 0.0]}, "each model reachable"),
-    ({"imm_models": [{"model": "imm", "process_noise": 1.0}]}, "imm_models\\[0\\] must be"),
-    ({"v_min": 2.5}, "need 0 <= v_min < v_max"),
-    ({"n_min": 1}, "n_min must be >= 2"),
-])
-def test_bad_parameters_raise(bad, match):
-    with pytest.raises(ValueError, match=match):
-        TrackerParams(**bad)
 
 
 def _crowd_input(seed=21, n=12, steps=250):
@@ -365,9 +353,10 @@ def test_the_default_tracker_is_unchanged():
     # deletion). Reference: the tracker of commit 9e693aa (pipeline/tracking/nnt.py) on this input gave these
     # numbers. Today's gives the same ids, detections and matches; it sums in another order (a struct of arrays,
     # vec(F P F^T) as (F (x) F) vec(P)), so its floats differ from those by up to ~1e-14 m, hence the tolerances.
-    p = TrackerParams()
-    assert (p.motion, p.association, p.initiation, p.deletion) == ("cv", "greedy", "none", "fixed")
     trk = NearestNeighbourTracker()
+    assert (trk.association, trk.initiation, trk.deletion, trk.duplicates) == (GreedyNN(), CountInitiation(),
+                                                                              FixedDeletion(), None)
+    assert type(trk.motion) is ConstantVelocity and trk.motion.process_noise == 0.267
     outs = [trk.update(f.stamp, f) for f in _crowd_input()]
 
     def cat(name):

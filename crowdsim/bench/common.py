@@ -25,6 +25,12 @@ def write_figures(json_path: str | None, figures: dict) -> None:
             f.write("\n")
 
 
+def add_arguments(parser) -> None:
+    """The flags every benchmark takes."""
+    parser.add_argument("--json", help="also write the figures to this JSON file")
+    parser.add_argument("--quick", action="store_true", help="shorter measurements (for a smoke test)")
+
+
 def rate(fn, calls: int, blocks: int = 5) -> float:
     """Median calls/s of ``fn`` over ``blocks`` timed blocks of ``calls`` calls (one untimed block first)."""
     for _ in range(max(1, calls // 5)):

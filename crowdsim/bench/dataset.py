@@ -19,6 +19,7 @@ from scenarios import load_scenario
 from ..datasets.episode import write_episode
 from ..datasets.layout import EPISODE_FILES
 from .common import write_figures
+from .common import add_arguments  # noqa: F401  (its flags: those every benchmark takes)
 
 SENSOR_SETS = {"two lasers": "airport_disembarkation", "two lasers, two RGB-D and two wall cameras":
                "airport_disembarkation_cameras"}
@@ -50,3 +51,12 @@ def run_dataset_benchmark(json_path: str | None = None, quick: bool = False) -> 
                   f"{r['total_bytes_per_frame'] / 1e3:8.1f} kB/frame ({files})")
     write_figures(json_path, figures)
     return figures
+
+
+def main(args) -> int:
+    """``crowdsim bench dataset``."""
+    from ..cli import check_json
+
+    check_json(args)
+    run_dataset_benchmark(json_path=args.json, quick=args.quick)
+    return 0

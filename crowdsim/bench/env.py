@@ -29,6 +29,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
+from . import common
 from .common import rate, write_figures
 
 PEOPLE, VECTOR_ENVS, VECTOR_PEOPLE = 20, 64, 10
@@ -112,3 +113,23 @@ def run_env_benchmark(json_path: str | None = None, quick: bool = False, crowdna
         print(f"{'':66s} {peer['steps_per_s_without_reset']:10,.0f} steps/s without the time in reset()")
     write_figures(json_path, figures)
     return figures
+
+
+def add_arguments(parser) -> None:
+    common.add_arguments(parser)
+    parser.add_argument("--crowdnav", metavar="PYTHON", help="also time CrowdNav with this interpreter")
+    parser.add_argument("--crowdnav-dir", metavar="DIR", help="CrowdNav's checkout, if not installed")
+    parser.add_argument("--socnavgym", metavar="PYTHON", help="also time SocNavGym with this interpreter")
+    parser.add_argument("--socnavgym-config", metavar="FILE", help="the SocNavGym environment config to use")
+
+
+def main(args) -> int:
+    """``crowdsim bench env``."""
+    from ..cli import UsageError, check_json
+
+    check_json(args)
+    if args.socnavgym and not args.socnavgym_config:
+        raise UsageError("--socnavgym: expected --socnavgym-config too (one of SocNavGym's environment configs)")
+    run_env_benchmark(json_path=args.json, quick=args.quick, crowdnav=args.crowdnav, crowdnav_dir=args.crowdnav_dir,
+                      socnavgym=args.socnavgym, socnavgym_config=args.socnavgym_config)
+    return 0

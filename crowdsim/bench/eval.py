@@ -20,6 +20,7 @@ import numpy as np
 from evaluation import Sequence
 
 from .common import write_figures
+from .common import add_arguments  # noqa: F401  (its flags: those every benchmark takes)
 
 FRAMES, PERSONS = 5000, 80
 
@@ -97,3 +98,12 @@ def run_eval_benchmark(json_path: str | None = None, quick: bool = False) -> dic
         print(f"  {label:50s} {figures[key + '_frames_per_s']:9.0f} frames/s{target}")
     write_figures(json_path, figures)
     return figures
+
+
+def main(args) -> int:
+    """``crowdsim bench eval``."""
+    from ..cli import check_json
+
+    check_json(args)
+    run_eval_benchmark(json_path=args.json, quick=args.quick)
+    return 0

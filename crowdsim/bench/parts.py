@@ -12,6 +12,7 @@ import numpy as np
 from scenarios import load_scenario
 
 from .common import HALL, populated_crowd, rate, write_figures
+from .common import add_arguments  # noqa: F401  (its flags: those every benchmark takes)
 from .seed001 import bench_seed001
 from .seed003 import bench_seed003
 
@@ -176,3 +177,12 @@ def run_benchmarks(json_path: str | None = None, quick: bool = False) -> dict:
     figures["seed003"] = rgbd
     write_figures(json_path, figures)
     return figures
+
+
+def main(args) -> int:
+    """``crowdsim bench loop``."""
+    from ..cli import check_json
+
+    check_json(args)
+    run_benchmarks(json_path=args.json, quick=args.quick)
+    return 0

@@ -21,6 +21,7 @@ from scenarios.format import DEPTH_CAMERA
 from scenarios.schema import validate
 
 from .common import HALL, populated_crowd, rate, write_figures
+from .common import add_arguments  # noqa: F401  (its flags: those every benchmark takes)
 
 DEPTH = validate({"name": "front_depth", "preset": "kinect_160", "position": [0.45, 0.0, 1.45], "pitch": 0.1},
                  DEPTH_CAMERA, "<bench>")
@@ -69,15 +70,15 @@ def per_call_ms(n_people: int, quick: bool) -> dict:
                 scene, np.random.default_rng(0))
     out["laser_38cm_s300_full_bodies"] = 1e3 / rate(lambda: leg.scan(0.0, pose), reps)
     depth = DepthCamera(DEPTH, scene, np.random.default_rng(0))
-    out["depth_160x120"] = 1e3 / rate(lambda: depth.capture(0.0), max(3, reps // 3))
-    image = depth.capture(0.0)
+    out["depth_160x120"] = 1e3 / rate(lambda: depth.render(0.0), max(3, reps // 3))
+    image = depth.render(0.0)
     out["depth_160x120_visibility"] = 1e3 / rate(lambda: depth.visibility(image), max(3, reps // 3))
     depth640 = DepthCamera(DEPTH_640, scene, np.random.default_rng(0))
-    out["depth_640x480"] = 1e3 / rate(lambda: depth640.capture(0.0), max(2, reps // 10))
+    out["depth_640x480"] = 1e3 / rate(lambda: depth640.render(0.0), max(2, reps // 10))
     wall = WallCamera(WALL, scene)
-    out["wall_320x240_rgb_boxes"] = 1e3 / rate(lambda: wall.capture(0.0), max(3, reps // 3))
+    out["wall_320x240_rgb_boxes"] = 1e3 / rate(lambda: wall.render(0.0), max(3, reps // 3))
     out["renderer"] = depth.backend
-    out["people_in_wall_image"] = int(len(wall.capture(0.0).ids))
+    out["people_in_wall_image"] = int(len(wall.render(0.0).ids))
     return out
 
 
@@ -166,14 +167,14 @@ def airport_mix_ms(quick: bool, people: int = 100) -> dict:
     depth = DepthCamera(dict(sim.depth_cameras[0].p, rgb=False), sim.camera_scene, np.random.default_rng(0))
     wall = sim.wall_cameras[0]
     sim.camera_scene.sync(pose, *person)
-    image = depth.capture(0.0)
+    image = depth.render(0.0)
     out = {"scene_sync_torsos_only": 1e3 / rate(lambda: sim.scene.sync(pose, *person), reps),
            "two_lasers_one_batched_call": 1e3 / rate(lambda: sim.laser_array.scan(0.0, pose, [0, 1]), reps),
            "scene_sync": 1e3 / rate(lambda: sim.camera_scene.sync(pose, *person), reps),
-           "depth_160x120": 1e3 / rate(lambda: depth.capture(0.0), max(3, reps // 3)),
+           "depth_160x120": 1e3 / rate(lambda: depth.render(0.0), max(3, reps // 3)),
            "depth_160x120_visibility": 1e3 / rate(lambda: depth.visibility(image), max(3, reps // 3)),
-           "wall_320x240_rgb_boxes": 1e3 / rate(lambda: wall.capture(0.0), max(3, reps // 3)),
-           "renderer": depth.backend, "people_in_wall_image": int(len(wall.capture(0.0).ids))}
+           "wall_320x240_rgb_boxes": 1e3 / rate(lambda: wall.render(0.0), max(3, reps // 3)),
+           "renderer": depth.backend, "people_in_wall_image": int(len(wall.render(0.0).ids))}
     return out
 
 
@@ -204,3 +205,12 @@ def run_sensor_benchmarks(json_path: str | None = None, quick: bool = False) -> 
                     print(f"    {key:40s} {value:9.3f} ms per call")
     write_figures(json_path, figures)
     return figures
+
+
+def main(args) -> int:
+    """``crowdsim bench sensors``."""
+    from ..cli import check_json
+
+    check_json(args)
+    run_sensor_benchmarks(json_path=args.json, quick=args.quick)
+    return 0

@@ -38,6 +38,7 @@ import numpy as np
 from scenarios import scenario_from_dict
 
 from .common import write_figures
+from .common import add_arguments  # noqa: F401  (its flags: those every benchmark takes)
 
 CORRIDOR_LENGTH = 250.0  # m
 CORRIDOR_WIDTH = 20.0  # m
@@ -230,6 +231,15 @@ def run_sim_benchmark(counts=(100, 1000, 5000), quick: bool = False, json_path: 
               "simulates faster")
     write_figures(json_path, figures)
     return figures
+
+
+def main(args) -> int:
+    """``crowdsim bench sim``."""
+    from ..cli import check_json
+
+    check_json(args)
+    run_sim_benchmark(quick=args.quick, json_path=args.json)
+    return 0
 
 
 if __name__ == "__main__":

@@ -22,6 +22,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from evaluation.navigation_report import json_safe
+from pipeline.frames import compose, inverse, rotate, transform_points
 
 from ..loop import Frame, Simulation
 from ..run import _without_unset
@@ -204,16 +205,6 @@ TRACKS_SCHEMA = pa.schema([
     ("world_vy", pa.float64())])
 
 
-def _world(world_T_odom: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    c, s = np.cos(world_T_odom[2]), np.sin(world_T_odom[2])
-    return xy @ np.array([[c, s], [-s, c]]) + world_T_odom[:2]
-
-
-def _rotate(world_T_odom: np.ndarray, v: np.ndarray) -> np.ndarray:
-    c, s = np.cos(world_T_odom[2]), np.sin(world_T_odom[2])
-    return v @ np.array([[c, s], [-s, c]])
-
-
 class EpisodeWriter:
     """Writes the frames of one simulation into ``out`` (an empty directory)."""
 
@@ -333,14 +324,12 @@ class EpisodeWriter:
 
 def _odom_pose(frame: Frame) -> np.ndarray:
     """The robot's odometry pose in odom: the true pose brought through the inverse of the true world_T_odom."""
-    from pipeline.frames import compose, inverse
-
     return compose(inverse(frame.world_T_odom), frame.robot_pose)
 
 
 def _detection_columns(frame: Frame, name: str, d) -> dict:
     n = len(d)
-    world = _world(frame.world_T_odom, d.position[:, :2])
+    world = transform_points(frame.world_T_odom, d.position[:, :2])
     return {"frame": np.full(n, frame.index, np.int32), "t": np.full(n, d.stamp), "detector": np.full(n, name, object),
             "modality": np.full(n, d.modality, object), "id": d.detection_id, "x": d.position[:, 0],
             "y": d.position[:, 1], "z": d.position[:, 2], "confidence": d.confidence,
@@ -351,7 +340,7 @@ def _detection_columns(frame: Frame, name: str, d) -> dict:
 def _track_columns(frame: Frame) -> dict:
     t = frame.tracks
     n = len(t)
-    world, world_v = _world(frame.world_T_odom, t.position), _rotate(frame.world_T_odom, t.velocity)
+    world, world_v = transform_points(frame.world_T_odom, t.position), rotate(frame.world_T_odom, t.velocity)
     return {"frame": np.full(n, frame.index, np.int32), "t": np.full(n, frame.stamp), "id": t.track_id,
             "x": t.position[:, 0], "y": t.position[:, 1], "vx": t.velocity[:, 0], "vy": t.velocity[:, 1],
             "cov_xx": t.position_covariance[:, 0, 0], "cov_xy": t.position_covariance[:, 0, 1],

@@ -12,6 +12,8 @@ import json
 
 import numpy as np
 
+from pipeline.frames import optical_rotation
+
 from ..errors import Error
 
 FORMAT_VERSION = "1.0"
@@ -69,14 +71,6 @@ def file_digest(path) -> tuple[int, str]:
             h.update(block)
             size += len(block)
     return size, h.hexdigest()
-
-
-def optical_rotation(yaw: float, pitch: float) -> np.ndarray:
-    """The rotation [3, 3] whose columns are a camera's optical axes (x right, y down, z forward) in its parent's
-    frame, for a camera looking along ``yaw`` and down by ``pitch`` (the scenario's keys; sensors/scene.py)."""
-    forward = np.array([np.cos(pitch) * np.cos(yaw), np.cos(pitch) * np.sin(yaw), -np.sin(pitch)])
-    right = np.array([np.sin(yaw), -np.cos(yaw), 0.0])
-    return np.column_stack([right, np.cross(forward, right), forward])
 
 
 def camera_matrix(width: int, height: int, fovy_deg: float) -> list[list[float]]:

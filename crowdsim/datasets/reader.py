@@ -17,6 +17,8 @@ import h5py
 import numpy as np
 import pyarrow.parquet as pq
 
+from pipeline.frames import compose, to_frame
+
 from .layout import MANIFEST, DatasetError
 
 TABLES = ("persons", "detections", "tracks")
@@ -218,8 +220,4 @@ def collate(samples: list[dict]) -> dict:
 def to_sensor(xy: np.ndarray, robot_pose: np.ndarray, mount: tuple[float, float, float]) -> np.ndarray:
     """World points [n, 2] in the frame of a sensor mounted at ``mount`` (x, y, yaw in base_link) on a robot at
     ``robot_pose`` (world)."""
-    c, s = np.cos(robot_pose[2]), np.sin(robot_pose[2])
-    sensor = robot_pose[:2] + np.array([c * mount[0] - s * mount[1], s * mount[0] + c * mount[1]])
-    yaw = robot_pose[2] + mount[2]
-    c, s = np.cos(yaw), np.sin(yaw)
-    return (xy - sensor) @ np.array([[c, -s], [s, c]])
+    return to_frame(compose(robot_pose, mount), xy)

@@ -16,12 +16,13 @@ import numpy as np
 from evaluation.navigation import NavEpisode, PersonRows, navigation_metrics
 from pipeline.assemble import build_pipeline
 from pipeline.frames import compose, inverse, transform_points
-from pipeline.fusion import to_frame
+from pipeline.software import RobotSoftware
 from scenarios import scenario_from_dict
 from sensors import Laser, Scene, parts_at
 from sensors.body import body_scale
 from sensors.tag import TagSensor
 
+from ..errors import Error
 from .layouts import LAYOUTS
 from .observe import Observer
 from .reward import BAND, Reward
@@ -60,20 +61,20 @@ class Config:
 
     def __post_init__(self):
         if self.task not in TASKS:
-            raise ValueError(f"task: expected one of {TASKS}, got {self.task!r}")
+            raise Error(f"task: expected one of {TASKS}, got {self.task!r}")
         obs = (self.observation,) if isinstance(self.observation, str) else tuple(self.observation)
         bad = [m for m in obs if m not in MODES]
         if not obs or bad:
-            raise ValueError(f"observation: expected one or more of {MODES}, got {self.observation!r}")
+            raise Error(f"observation: expected one or more of {MODES}, got {self.observation!r}")
         self.observation = obs
         if self.scenario not in LAYOUTS:
-            raise ValueError(f"scenario: expected one of {sorted(LAYOUTS)}, got {self.scenario!r}")
+            raise Error(f"scenario: expected one of {sorted(LAYOUTS)}, got {self.scenario!r}")
         if int(self.people) != self.people or self.people < 0:
-            raise ValueError(f"people: expected a whole number >= 0, got {self.people!r}")
+            raise Error(f"people: expected a whole number >= 0, got {self.people!r}")
         if self.k_nearest < 1:
-            raise ValueError(f"k_nearest: expected at least 1, got {self.k_nearest}")
+            raise Error(f"k_nearest: expected at least 1, got {self.k_nearest}")
         if self.time_limit <= 0:
-            raise ValueError(f"time_limit: expected seconds above 0, got {self.time_limit}")
+            raise Error(f"time_limit: expected seconds above 0, got {self.time_limit}")
 
 
 class Episodes:
@@ -87,7 +88,7 @@ class Episodes:
         self.scenario = scenario_from_dict(raw, source="<environment scenario>")
         self.ticks = int(round(config.control_period / self.scenario["dt"]))
         if self.ticks < 1 or abs(self.ticks * self.scenario["dt"] - config.control_period) > 1e-9:
-            raise ValueError(f"control_period: expected a whole number of {self.scenario['dt']} s ticks, "
+            raise Error(f"control_period: expected a whole number of {self.scenario['dt']} s ticks, "
                              f"got {config.control_period}")
         robot = self.scenario["robot"]
         self.top_speed = np.array([robot["max_speed"], robot["max_angular_speed"]])  # actions of 1 command these
@@ -102,7 +103,7 @@ class Episodes:
         c = self.config
         self.worlds = Worlds(self.n, c.people, c.scenario, self.scenario, c.robot_visible)
         self.noise_rng: list[np.random.Generator | None] = [None] * self.n
-        self.scenes, self.lasers, self.pipelines = [], [], []
+        self.scenes, self.lasers, self.software = [], [], []
         self.tracks = [None] * self.n
         self.scans = [None] * self.n
         self.start = np.zeros((self.n, 3))
@@ -118,7 +119,7 @@ class Episodes:
             return
         unknown = set(options) - {"scenario", "people", "robot_visible", "reset_mask"}
         if unknown:
-            raise ValueError(f"options: unknown key(s) {sorted(unknown)}; expected scenario, people, robot_visible")
+            raise Error(f"options: unknown key(s) {sorted(unknown)}; expected scenario, people, robot_visible")
         changed = {k: options[k] for k in ("scenario", "people", "robot_visible") if k in options}
         if changed:
             self.config = Config(**{**self.config.__dict__, **changed})
@@ -149,9 +150,10 @@ class Episodes:
                 scene = Scene(w.walls, w.robot_radius, max(w.N, 1), parts_at(laser_p["height"]))
                 self.scenes.append(scene)
                 self.lasers.append(None)
-                self.pipelines.append(build_pipeline(self.scenario["pipeline"], [laser_p["name"]]))
+                self.software.append(RobotSoftware(build_pipeline(self.scenario["pipeline"], [laser_p["name"]]),
+                                                   groups=False))
         self.lasers[k] = Laser(laser_p, self.scenes[k], rng)
-        self.pipelines[k].reset()
+        self.software[k].reset()
         self._sense(k)
 
     def _read_tag(self, k: int) -> None:
@@ -169,7 +171,7 @@ class Episodes:
         return compose(inverse(self.start[k]), self.worlds.robot_pose[k])
 
     def _sense(self, k: int) -> None:
-        """World k's laser scan and, when tracks are observed, one cycle of its pipeline."""
+        """World k's laser scan and, when tracks are observed, one cycle of its robot's software (no groups)."""
         w, laser = self.worlds, self.lasers[k]
         ids = np.arange(1, w.N + 1)
         self.scenes[k].sync(w.robot_pose[k], ids, w.position[k], w.velocity[k], w.walked[k],
@@ -178,9 +180,9 @@ class Episodes:
         scan = laser.scan(stamp, w.robot_pose[k])
         self.scans[k] = scan
         if "tracks" in self.config.observation:
-            pipe = self.pipelines[k]
-            dets = to_frame(pipe.detectors[laser.name].detect(scan), laser.pose_in(self.odom_pose(k)), "odom")
-            self.tracks[k] = pipe.tracker.update(stamp, pipe.fusion.fuse({laser.name: dets}))
+            software = self.software[k]
+            software.receive(scan, laser.pose_in(self.odom_pose(k)))
+            self.tracks[k] = software.cycle(stamp).tracks
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict]]:
         """One control period for every episode: actions [E, 2] in [-1, 1] scaled to the robot's limits. Returns

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import Error
+
 CELL = 0.8  # m, grid spacing of start places (two body diameters and a margin)
 JITTER = 0.15  # m, +- uniform on each axis of a grid place (less than half the margin between bodies)
 CLEAR = 1.5  # m, no one starts nearer than this to the robot's start or the target's
@@ -57,7 +59,7 @@ def _places(cells: np.ndarray, keep_clear: np.ndarray, n: int, rng: np.random.Ge
     """``n`` distinct jittered cells, none within CLEAR of a point of ``keep_clear`` [k, 2]."""
     free = cells[(np.linalg.norm(cells[:, None] - keep_clear[None], axis=2) >= CLEAR).all(axis=1)]
     if n > len(free):
-        raise ValueError(f"people: layout {name!r} has room for at most {len(free)} persons, got {n}")
+        raise Error(f"people: layout {name!r} has room for at most {len(free)} persons, got {n}")
     chosen = free[rng.choice(len(free), n, replace=False)]
     return chosen + rng.uniform(-JITTER, JITTER, chosen.shape)
 
@@ -88,7 +90,7 @@ def circle_crossing(n: int, rng: np.random.Generator, radius: float = 4.0) -> La
     span = 2 * np.pi - 2 * gap
     spacing = span / max(n, 1)
     if n and spacing * radius < CELL:
-        raise ValueError(f"people: layout 'circle_crossing' has room for at most {int(span * radius / CELL)} "
+        raise Error(f"people: layout 'circle_crossing' has room for at most {int(span * radius / CELL)} "
                          f"persons, got {n}")
     jitter = rng.uniform(-0.25, 0.25, n) * (spacing - CELL / radius)
     angle = -np.pi / 2 + gap + (np.arange(n) + 0.5) * spacing + jitter
@@ -99,7 +101,7 @@ def circle_crossing(n: int, rng: np.random.Generator, radius: float = 4.0) -> La
 
 def following(n: int, rng: np.random.Generator) -> Layout:
     if n < 1:
-        raise ValueError(f"people: layout 'following' needs at least 1 person (the target), got {n}")
+        raise Error(f"people: layout 'following' needs at least 1 person (the target), got {n}")
     size = (14.0, 14.0)
     robot = np.array([2.0, 2.0, 0.0])
     target = np.array([[3.5, 2.0]])

@@ -23,6 +23,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from ..errors import Error
 from .core import Config, Episodes
 from .record import EnvRecording
 from .render import top_down
@@ -43,7 +44,7 @@ class CrowdEnv(gym.Env):
     def __init__(self, task: str = "navigate", render_mode: str | None = None, record: str | None = None,
                  **kwargs):
         if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
+            raise Error(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
         self.episodes = Episodes(1, _config(task, kwargs))
         self.recording = EnvRecording(record) if record else None
@@ -83,7 +84,7 @@ class CrowdVectorEnv(VectorEnv):
     def __init__(self, num_envs: int = 1, task: str = "navigate", render_mode: str | None = None,
                  autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP, **kwargs):
         if num_envs < 1:
-            raise ValueError(f"num_envs: expected at least 1, got {num_envs}")
+            raise Error(f"num_envs: expected at least 1, got {num_envs}")
         self.num_envs = num_envs
         self.render_mode = render_mode
         self.episodes = Episodes(num_envs, _config(task, kwargs))
@@ -102,14 +103,14 @@ class CrowdVectorEnv(VectorEnv):
         mask = np.ones(self.num_envs, bool) if not options or "reset_mask" not in options else np.asarray(
             options["reset_mask"], bool)
         if mask.shape != (self.num_envs,):
-            raise ValueError(f"options['reset_mask']: expected {self.num_envs} booleans, got shape {mask.shape}")
+            raise Error(f"options['reset_mask']: expected {self.num_envs} booleans, got shape {mask.shape}")
         seeds = ([int(seed) + i for i in range(self.num_envs)] if isinstance(seed, numbers.Integral)
                  else list(seed) if seed is not None else [None] * self.num_envs)
         if len(seeds) != self.num_envs:
-            raise ValueError(f"seed: expected an int or {self.num_envs} seeds, got {len(seeds)}")
+            raise Error(f"seed: expected an int or {self.num_envs} seeds, got {len(seeds)}")
         changes = {k: v for k, v in (options or {}).items() if k != "reset_mask"}
         if changes and not mask.all():
-            raise ValueError("options: scenario, people and robot_visible change every sub-environment; "
+            raise Error("options: scenario, people and robot_visible change every sub-environment; "
                              "expected no reset_mask with them")
         self.episodes.apply_options(changes)
         for i in np.flatnonzero(mask):

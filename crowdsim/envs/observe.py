@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from gymnasium import spaces
 
-from pipeline.frames import inverse, transform_points
+from pipeline.frames import inverse, rotate, rotate_covariances, rotation, transform_points
 from pipeline.types import UNKNOWN_VARIANCE
 from sensors.tag import TAG_DEFAULTS
 
@@ -99,11 +99,9 @@ class Observer:
             if tracks is None or len(tracks) == 0:
                 continue
             base = inverse(episodes.odom_pose(k))  # odom -> base_link
-            c, s = np.cos(base[2]), np.sin(base[2])
-            rot = np.array([[c, -s], [s, c]])
             pos = transform_points(base, tracks.position)
-            vel = tracks.velocity @ rot.T
-            cov = rot @ tracks.position_covariance @ rot.T
+            vel = rotate(base, tracks.velocity)
+            cov = rotate_covariances(rotation(base), tracks.position_covariance)
             rows = np.column_stack([pos, vel, cov[:, 0, 0], cov[:, 1, 1], cov[:, 0, 1], tracks.is_matched])
             table[k], mask[k] = _nearest(rows[None], (pos * pos).sum(axis=1)[None], K)
         return table, mask

@@ -22,6 +22,8 @@ import numpy as np
 
 from pipeline.navigation.zones import SecurityZones
 
+from ..errors import Error
+
 DISCOMFORT_DISTANCE = 0.2  # m (CrowdNav's discomfort_dist)
 PRESETS = {
     "default": {"progress": 1.0, "goal": 10.0, "collision": -10.0, "discomfort": -2.0, "zone": -1.0, "band": 1.0,
@@ -37,11 +39,11 @@ class Reward:
     def __init__(self, spec: str | dict, task: str):
         if isinstance(spec, str):
             if spec not in PRESETS:
-                raise ValueError(f"reward: expected one of {sorted(PRESETS)} or a dict of term weights, got {spec!r}")
+                raise Error(f"reward: expected one of {sorted(PRESETS)} or a dict of term weights, got {spec!r}")
             spec = PRESETS[spec]
         unknown = set(spec) - set(TERMS)
         if unknown:
-            raise ValueError(f"reward: unknown term(s) {sorted(unknown)}; expected some of {TERMS}")
+            raise Error(f"reward: unknown term(s) {sorted(unknown)}; expected some of {TERMS}")
         self.weights = {name: float(spec.get(name, 0.0)) for name in TERMS}
         self.task = task
 

@@ -22,6 +22,7 @@ from crowdsim.crowd.behaviours import AgentTypes
 from crowdsim.robot import arc, limited
 from pipeline.frames import compose
 
+from ..errors import Error
 from .layouts import LAYOUTS, Layout, room_walls
 
 ARRIVED = 0.5  # m: a person this near their current route place heads for the next
@@ -34,9 +35,9 @@ class Worlds:
 
     def __init__(self, n_worlds: int, people: int, layout: str, scenario: dict, robot_visible: bool = True):
         if layout not in LAYOUTS:
-            raise ValueError(f"scenario: expected one of {sorted(LAYOUTS)}, got {layout!r}")
+            raise Error(f"scenario: expected one of {sorted(LAYOUTS)}, got {layout!r}")
         if people < 0:
-            raise ValueError(f"people: expected a count >= 0, got {people}")
+            raise Error(f"people: expected a count >= 0, got {people}")
         self.E, self.N = n_worlds, people
         self.layout = LAYOUTS[layout]
         self.crowd_p = scenario["crowd"]

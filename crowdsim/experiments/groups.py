@@ -197,3 +197,29 @@ def write(out: Path, results: list[list[dict]], seeds: list[int]) -> str:
 
 def held_out_seeds(n: int) -> list[int]:
     return list(range(HELD_OUT_SEED, HELD_OUT_SEED + n))
+
+
+def add_arguments(parser) -> None:
+    from ..cli import add_out_argument
+
+    parser.add_argument("--seeds", type=int, default=5, help=f"held-out seeds, from {HELD_OUT_SEED} (default 5)")
+    parser.add_argument("--duration", type=float, default=DURATION,
+                        help=f"s of each airport run (default {DURATION:g})")
+    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    add_out_argument(parser, "groups")
+
+
+def main(args) -> int:
+    """``crowdsim experiment groups``."""
+    from ..cli import UsageError, check_duration, run_dir
+    from ..outdir import write_directory
+
+    if args.seeds < 1 or args.workers < 1:
+        raise UsageError(f"--seeds and --workers: expected at least 1, got {args.seeds} and {args.workers}")
+    check_duration(args)
+    seeds = held_out_seeds(args.seeds)
+    out = run_dir(args, "groups")
+    results = run(seeds, args.duration, workers=args.workers)
+    print(write_directory(out, lambda tmp: write(tmp, results, seeds)))
+    print(f"\n{out / 'groups.md'}, groups.json, groups.png")
+    return 0

@@ -188,3 +188,34 @@ def run_ppo(out: Path, minutes: float, envs: int = 8, people: int = 10, seed: in
                "people": people, "seed": seed, "ppo": trained, "random": random}
     (out / "results.json").write_text(json.dumps(results, indent=2) + "\n")
     return results
+
+
+def add_arguments(parser) -> None:
+    from ..cli import add_out_argument
+
+    parser.add_argument("--minutes", type=float, default=30.0, help="wall-clock training budget (default 30)")
+    parser.add_argument("--envs", type=int, default=8, help="environments stepped together (default 8)")
+    parser.add_argument("--people", type=int, default=10, help="people per environment (default 10)")
+    parser.add_argument("--seed", type=int, default=0, help="training seed (evaluation seeds are disjoint)")
+    parser.add_argument("--eval-episodes", type=int, default=100, help="evaluation episodes per policy (default 100)")
+    add_out_argument(parser, "ppo")
+
+
+def main(args) -> int:
+    """``crowdsim experiment ppo``."""
+    from ..cli import UsageError, run_dir
+    from ..outdir import write_directory
+
+    if args.minutes <= 0:
+        raise UsageError(f"--minutes: expected a time above 0, got {args.minutes}")
+    out = run_dir(args, "ppo")
+    r = write_directory(out, lambda tmp: run_ppo(tmp, args.minutes, envs=args.envs, people=args.people,
+                                                 seed=args.seed, eval_episodes=args.eval_episodes))
+    print(f"PPO: {r['steps']:,} steps in {r['train_wall_s'] / 60:.1f} min ({r['steps_per_s']:.0f}/s), "
+          f"{r['training_episodes']} training episodes")
+    for name in ("ppo", "random"):
+        e = r[name]
+        print(f"{name:7s} on {e['episodes']} evaluation seeds: success {e['success_rate']:.0%}, collision "
+              f"{e['collision_rate']:.0%}, timeout {e['timeout_rate']:.0%}, mean return {e['mean_return']:.2f}")
+    print(f"learning curve: {out / 'learning_curve.png'}")
+    return 0

@@ -41,8 +41,8 @@ def record(scenario: dict, seed: int, duration: float | None = None) -> list[Cyc
     from crowdsim.loop import Simulation
 
     sim = Simulation(scenario)
-    if sim.driver not in ("route", "script"):
-        raise ValueError(f"recording needs a scenario whose robot drives its route or script, not '{sim.driver}': "
+    if sim.driver.name not in ("route", "script"):
+        raise ValueError(f"recording needs a scenario whose robot drives its route or script, not '{sim.driver.name}': "
                          "the robot would move with the pipeline's output")
     lasers = {laser.name: laser for laser in sim.lasers}
     sim.reset(seed)
@@ -77,7 +77,7 @@ def track(cycles: list[Cycle], detections: list[DetectedPersons], tracker, thres
           evaluations: dict[str, float] | None = None) -> tuple[dict[str, dict], float]:
     """``tracker`` (a fresh one) over the recorded detections, scored by CLEAR-MOT at ``threshold`` once per entry of
     ``evaluations`` (name -> least speed counted, m/s: slower persons are ignored as the occluded are; default
-    {"all": 0}): the summaries by name, and the tracker's cycles per second of its own update time."""
+    {"all": 0}): the ClearMotResult by name, and the tracker's cycles per second of its own update time."""
     evaluations = {"all": 0.0} if evaluations is None else evaluations
     scores = {name: ClearMot(threshold) for name in evaluations}
     spent = 0.0
@@ -88,4 +88,4 @@ def track(cycles: list[Cycle], detections: list[DetectedPersons], tracker, thres
         for name, min_speed in evaluations.items():
             ignore = c.gt_ignore | (c.gt_speed < min_speed) if min_speed > 0 else c.gt_ignore
             scores[name].update(c.gt_ids, c.gt_position, tracks.track_id, tracks.position, ignore)
-    return {name: score.summary() for name, score in scores.items()}, len(cycles) / spent
+    return {name: score.result() for name, score in scores.items()}, len(cycles) / spent

@@ -68,16 +68,19 @@ def airport() -> dict:
 def collect(seed: int, duration: float = DURATION) -> list[GroupCycle]:
     """Every tracking cycle of an airport run from ``seed``."""
     from crowdsim.loop import Simulation
+    from crowdsim.scoring import CycleScorer
 
     sim = Simulation(airport())
     sim.reset(seed)
     sim.warm_up()
+    score = CycleScorer(sim.scenario["evaluation"]["threshold"])
     out = []
     for f in sim.frames(duration):
         gt = f.groundtruth.select(~f.gt_tags.ignore)
         queued = np.isin(gt.track_id, f.agents.id[sim.crowd.queued >= 0])
-        out.append(GroupCycle(f.stamp, f.tracks, gt, f.score.matched_gt_ids, f.score.matched_hyp_ids,
-                              f.score.excused_hyp_ids, queued))
+        matched = score(f)
+        out.append(GroupCycle(f.stamp, f.tracks, gt, matched.matched_gt_ids, matched.matched_hyp_ids,
+                              matched.excused_hyp_ids, queued))
     return out
 
 

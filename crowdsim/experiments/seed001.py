@@ -127,9 +127,8 @@ def replay(frames: list[RecordedFrame], weights: dict, cameras: tuple, run: int,
         spent += time.perf_counter() - t
         result = score.update(f.gt_ids, f.gt_position, tracks.track_id, tracks.position)
         swaps.update(result)
-    s = score.summary()
-    row = [s["tsr"], s["miss_rate"], s["fp_rate"], s["id_switches"], 100 * (s["motp_m"] or np.nan), s["mota"],
-           swaps.count]
+    s = score.result()
+    row = [s.tsr, s.miss_rate, s.fp_rate, s.id_switches, 100 * (s.motp_m or np.nan), s.mota, swaps.count]
     return row, 1000 * spent / len(frames)
 
 
@@ -335,3 +334,32 @@ def write_tuning(out, result: dict) -> str:
                                                      "start": TUNE_START, "margin": TUNE_MARGIN, **result},
                                                     indent=1) + "\n")
     return text
+
+
+def add_arguments(parser) -> None:
+    from ..cli import add_out_argument
+
+    parser.add_argument("--runs", type=int, default=8, help="filter runs per sequence and mode (default 8, as seed "
+                                                            "001's)")
+    parser.add_argument("--tune", action="store_true", help="choose the filter's pooled-likelihood parameters on "
+                                                            "training sequences (rooms 3 and 2 at seeds 4000, 4001) "
+                                                            "in place of the tables: tune.md, tune.json")
+    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    add_out_argument(parser, "seed001")
+
+
+def main(args) -> int:
+    """``crowdsim experiment seed001``."""
+    from ..cli import UsageError, run_dir
+    from ..outdir import write_directory
+
+    if args.runs < 1 or args.workers < 1:
+        raise UsageError(f"--runs and --workers: expected at least 1, got {args.runs} and {args.workers}")
+    out = run_dir(args, "seed001")
+    if args.tune:
+        print(write_directory(out, lambda tmp: write_tuning(tmp, tune(workers=args.workers))))
+        return 0
+    results = experiment(args.runs, workers=args.workers)
+    print(write_directory(out, lambda tmp: write(tmp, results)))
+    print(f"\n{out / 'seed001.md'}, seed001.json, seed001.png")
+    return 0

@@ -140,11 +140,11 @@ class Scores:
         """Per kind: instances, matches, FP, FN, ID switches, re-entries and the summed match quality."""
         out = {}
         for kind, score in (("2d", self.box), ("3d", self.floor)):
-            s = score.summary()
-            quality = s["matches"] * (s["motp_m"] or 0.0)
+            s = score.result()
+            quality = s.matches * (s.motp_m or 0.0)
             if kind == "2d":
-                quality = s["matches"] - quality  # 1 - IoU summed: IoU summed
-            out[kind] = [s["gt"], s["matches"], s["fp"], s["fn"], s["id_switches"], self.reentries[kind], quality]
+                quality = s.matches - quality  # 1 - IoU summed: IoU summed
+            out[kind] = [s.gt, s.matches, s.fp, s.fn, s.id_switches, self.reentries[kind], quality]
         return out
 
 
@@ -338,3 +338,28 @@ def write(out, results: dict) -> str:
         "runs": results["runs"]}, indent=1) + "\n")
     plot(results, out / "seed003.png")
     return text
+
+
+def add_arguments(parser) -> None:
+    from ..cli import add_out_argument
+
+    parser.add_argument("--seeds", type=int, default=1, help=f"evaluation seeds from {FIRST_SEED}, each 20 runs "
+                                                             "(default 1)")
+    parser.add_argument("--preset", choices=("kinect_160", "kinect_640"), default="kinect_160",
+                        help="the robot camera's resolution (default kinect_160, QQVGA, as seed 003's timing)")
+    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    add_out_argument(parser, "seed003")
+
+
+def main(args) -> int:
+    """``crowdsim experiment seed003``."""
+    from ..cli import UsageError, run_dir
+    from ..outdir import write_directory
+
+    if args.seeds < 1 or args.workers < 1:
+        raise UsageError(f"--seeds and --workers: expected at least 1, got {args.seeds} and {args.workers}")
+    out = run_dir(args, "seed003")
+    results = experiment(args.seeds, workers=args.workers, preset=args.preset)
+    print(write_directory(out, lambda tmp: write(tmp, results)))
+    print(f"\n{out / 'seed003.md'}, seed003.json, seed003.png")
+    return 0

@@ -65,8 +65,8 @@ def replay(cycles: list[Cycle], detections: list, spec: dict) -> dict:
     miss % (of the counted ground truth), and the tracker's cycles/s."""
     tracker = build_part(validate(spec, TRACKER, "<table2>", "pipeline.tracker"), TRACKERS)
     summaries, hz = track(cycles, detections, tracker, 1.0, {"all": 0.0, "walking": WALKING})
-    return {name: {"mota": 100 * s["mota"], "ids": s["id_switches"], "fp": 100 * s["fp_rate"],
-                   "miss": 100 * s["miss_rate"], "hz": hz} for name, s in summaries.items()}
+    return {name: {"mota": 100 * s.mota, "ids": s.id_switches, "fp": 100 * s.fp_rate, "miss": 100 * s.miss_rate,
+                   "hz": hz} for name, s in summaries.items()}
 
 
 def _one_seed(seed: int, duration: float | None) -> list[dict]:
@@ -178,3 +178,28 @@ def write(out, figures: dict[str, np.ndarray], seeds: list[int]) -> str:
                  for k, (label, spec, paper) in enumerate(ROWS)]}, indent=1) + "\n")
     plot(figures, out / "table2.png")
     return text
+
+
+def add_arguments(parser) -> None:
+    from ..cli import add_out_argument
+
+    parser.add_argument("--seeds", type=int, default=20, help="seeds from 1 (default 20)")
+    parser.add_argument("--duration", type=float, help="s of each airport run (default: the scenario's)")
+    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    add_out_argument(parser, "table2")
+
+
+def main(args) -> int:
+    """``crowdsim experiment table2``."""
+    from ..cli import UsageError, check_duration, run_dir
+    from ..outdir import write_directory
+
+    if args.seeds < 1:
+        raise UsageError(f"--seeds: expected at least 1, got {args.seeds}")
+    check_duration(args)
+    seeds = list(range(1, args.seeds + 1))
+    out = run_dir(args, "table2")
+    figures = table2(seeds, args.duration, workers=args.workers)
+    print(write_directory(out, lambda tmp: write(tmp, figures, seeds)))
+    print(f"\n{out / 'table2.md'}, table2.json, table2.png")
+    return 0

@@ -279,3 +279,35 @@ def save_models(models: dict[str, SegmentModel], out: Path) -> list[Path]:
         os.replace(tmp, path)
         paths.append(path)
     return paths
+
+
+def add_arguments(parser) -> None:
+    from .training import add_models_out_argument
+
+    parser.add_argument("--seeds", type=int, default=20, help=f"training seeds, from {TRAIN_SEED} (default 20)")
+    parser.add_argument("--quick", action="store_true", help="4 short training seeds, 1 validation and 1 test seed (a "
+                                                             "smoke test, not models to ship)")
+    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    add_models_out_argument(parser, "pipeline/detectors/models/")
+
+
+def main(args) -> int:
+    """``crowdsim experiment train-detector``."""
+    import time
+
+    from pipeline.detectors.learned_segments import MODELS_DIR
+
+    from ..cli import UsageError
+    from .training import saved, sizes, training_out
+
+    if not 1 <= args.seeds <= VALIDATION_SEEDS[0] - TRAIN_SEED:
+        raise UsageError(f"--seeds: expected 1 to {VALIDATION_SEEDS[0] - TRAIN_SEED} training seeds, got {args.seeds}")
+    if args.workers < 1:
+        raise UsageError(f"--workers: expected at least 1 process, got {args.workers}")
+    out = training_out(args)
+    t0 = time.perf_counter()
+    models, report = train(args.seeds, quick=args.quick, workers=args.workers)
+    paths = saved(models, save_models, out, MODELS_DIR)
+    print(report)
+    print(f"{time.perf_counter() - t0:.0f} s; models: " + sizes(paths))
+    return 0

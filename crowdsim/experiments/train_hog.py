@@ -228,3 +228,79 @@ def save(model: HogModel, info: dict, out: Path = MODELS_DIR, name: str = MODEL_
                         weight=model.weight, bias=np.array(model.bias), threshold=np.array(model.threshold))
     os.replace(tmp, path)
     return path
+
+
+def add_arguments(parser) -> None:
+    """``train-hog``'s flags."""
+    from .training import add_models_out_argument
+
+    parser.add_argument("--camera", choices=("wall", "robot"), default="wall",
+                        help="the wall cameras' model (seed 001's room) or the robot depth camera's (seed 003's KTP "
+                             "room, training seeds from 5100)")
+    parser.add_argument("--seeds", type=int, default=10, help="training seeds, from 4100 (--camera robot: 5100; "
+                                                              "default 10)")
+    parser.add_argument("--duration", type=float, default=DURATION,
+                        help=f"s of each run the images come from (default {DURATION:g})")
+    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    add_models_out_argument(parser, "pipeline/detectors/models/")
+
+
+def main(args) -> int:
+    """``crowdsim experiment train-hog``: the wall cameras' model, or with ``--camera robot`` the robot camera's
+    (train_hog_robot.py)."""
+    import time
+
+    from ..cli import check_duration
+    from .training import saved, sizes, training_seeds_out
+
+    check_duration(args)
+    robot = args.camera == "robot"
+    if robot:
+        from pipeline.detectors.hog import ROBOT_MODEL_FILE
+
+        from .train_hog_robot import train as train_model
+        out = training_seeds_out(args, 100, 5100)
+    else:
+        train_model = train
+        out = training_seeds_out(args, 100, 4100)
+    t0 = time.perf_counter()
+    model, info = train_model(args.seeds, args.workers, args.duration)
+    name = ROBOT_MODEL_FILE if robot else None
+    paths = saved((model, info), lambda m, where: [save(*m, where, *([name] if name else []))], out, MODELS_DIR)
+    v = info["validation"]
+    print(f"{info['positives']} person windows, {info['negatives']} random and {info['hard_negatives']} hard "
+          f"negatives from seeds {info['train_seeds'][0]}-{info['train_seeds'][1]}; ", end="")
+    if robot:
+        print(f"threshold {model.threshold:.3f} ({info['threshold_recall']:.0%} of the {v['candidates_on_persons']} "
+              f"validation candidates on persons pass, {v['false_above_threshold']:.1%} of the "
+              f"{v['candidates_on_no_one']} on no one), track start {info['start_confidence']:.3f} "
+              f"({info['start_recall']:.0%} pass, {v['false_above_start']:.1%}); ", end="")
+    else:
+        print(f"validation (IoU 0.5): F1 {v['f1']:.3f}, precision {v['precision']:.3f}, recall {v['recall']:.3f} at "
+              f"score {model.threshold:.3f}; ", end="")
+    print(f"{time.perf_counter() - t0:.0f} s; model: " + sizes(paths))
+    return 0
+
+
+def add_compare_arguments(parser) -> None:
+    """``hog-vs-opencv``'s flags."""
+    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+
+
+def compare_main(args) -> int:
+    """``crowdsim experiment hog-vs-opencv``."""
+    from ..cli import UsageError
+
+    try:
+        import cv2  # noqa: F401
+    except ImportError:
+        raise UsageError('experiment hog-vs-opencv: needs OpenCV: pip install -e ".[compare]"') from None
+    r = compare_opencv(workers=args.workers)
+    print(f"HOG person detectors on held-out seeds {r['test_seeds']} ({r['images']} images, "
+          f"{r['ours_peak']['persons']} persons), a detection right at IoU 0.5:\n")
+    print("| detector | F1 | precision | recall |\n|---|---|---|---|")
+    for label, key in (("ours, at its threshold (validation seeds)", "ours_at_threshold"),
+                       ("ours, at its best threshold here", "ours_peak"),
+                       ("OpenCV's INRIA-trained, at its best threshold here", "opencv_peak")):
+        print(f"| {label} | {r[key]['f1']:.3f} | {r[key]['precision']:.3f} | {r[key]['recall']:.3f} |")
+    return 0

@@ -86,7 +86,7 @@ class Recorded:
         for cycles in self.runs:
             detections = detect(cycles, spec, self.scenario["map"])
             tracker = build_part(spec["tracker"], TRACKERS)
-            scores.append(100 * track(cycles, detections, tracker, threshold)[0]["all"]["mota"])
+            scores.append(100 * track(cycles, detections, tracker, threshold)[0]["all"].mota)
         return float(np.mean(scores))
 
 
@@ -136,3 +136,32 @@ def _plot(path: Path, values: list[float]) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def add_arguments(parser) -> None:
+    from ..cli import add_out_argument
+
+    parser.add_argument("--trials", type=int, default=50, help="trials (default 50)")
+    parser.add_argument("--storage", help="an Optuna storage to keep and resume the study, e.g. sqlite:///study.db")
+    parser.add_argument("--duration", type=float, default=60.0, help="s of each airport run (default 60)")
+    parser.add_argument("--seed", type=int, default=0, help="the sampler's seed (default 0)")
+    add_out_argument(parser, "tune")
+
+
+def main(args) -> int:
+    """``crowdsim experiment tune``."""
+    from ..cli import UsageError, check_duration, run_dir
+    from ..outdir import write_directory
+
+    try:
+        import optuna  # noqa: F401
+    except ImportError as e:
+        raise UsageError(f'experiment tune: needs {e.name}: pip install -e ".[tune]"') from None
+    check_duration(args)
+    out = run_dir(args, "tune")
+    r = write_directory(out, lambda tmp: tune(tmp, args.trials, args.storage, duration=args.duration,
+                                              seed=args.seed))
+    print(f"{r['trials']} trials; best MOTA {r['best_train_mota']:.1f}% on the training seeds; held out: "
+          f"{r['held_out_mota_best']:.1f}% against the airport's own {r['held_out_mota_airport']:.1f}%; "
+          f"{out / 'best.yaml'}")
+    return 0

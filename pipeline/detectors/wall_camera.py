@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.camera_geometry import image_to_floor
+from pipeline.frames import rotate_covariances, rotation, to_frame
 from pipeline.types import DetectedPersons
 
 from .background import SigmaDelta, person_blobs
@@ -66,10 +67,9 @@ class WallCameraDetector:
             seen &= ~(np.hypot(*(xy - frame.robot_position).T) < self.robot_radius)
         xy, confidence = xy[seen], np.asarray(confidence, float)[seen]
         n = len(xy)
-        rot, origin = frame.pose[:3, :3], frame.pose[:3, 3]
-        position = (np.column_stack([xy, np.zeros(n)]) - origin) @ rot  # the floor point in the optical frame
+        position = to_frame(frame.pose, np.column_stack([xy, np.zeros(n)]))  # the floor point in the optical frame
         floor_cov = np.diag([self.position_variance, self.position_variance, 1e-6])
-        cov = np.repeat((rot.T @ floor_cov @ rot)[None], n, axis=0)
+        cov = np.repeat(rotate_covariances(rotation(frame.pose).T, floor_cov)[None], n, axis=0)
         ids = np.arange(self._next_id, self._next_id + n, dtype=np.int64)
         self._next_id += n
         return DetectedPersons(frame.stamp, frame.frame, modality, ids, position, cov, confidence)

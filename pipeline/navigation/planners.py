@@ -26,7 +26,7 @@ import numbers
 import numpy as np
 
 from pipeline.assemble import check_outputs, make_user_part
-from pipeline.frames import inverse, transform_points
+from pipeline.frames import inverse, transform_points, unrotate
 from pipeline.types import TrackedPersons
 
 from .nd import NDResult, NearnessDiagram, drive, nearest_per_sector
@@ -68,9 +68,8 @@ class Planner:
         remaining = float(np.hypot(g[0], g[1])) - self.p["goal_tolerance"]
         if remaining <= 0:
             return 0.0, 0.0
-        c, s = np.cos(pose[2]), np.sin(pose[2])
         persons = transform_points(base, tracks.position)
-        person_velocity = tracks.velocity @ np.array([[c, -s], [s, c]])  # rotated into base_link
+        person_velocity = unrotate(pose, tracks.velocity)  # into base_link
         v, omega = self._command(pts, persons, person_velocity, g)
         p = self.p
         ahead = (pts[:, 0] > 0) & (np.abs(pts[:, 1]) < p["radius"])

@@ -10,6 +10,9 @@ describe but its tracker runs in every cycle (``srl_nearest_neighbor_tracker``, 
   every cycle.
 * **Clearance of new tracks**: a detection no track took starts no new track within ``clearance`` (0.25 m) of a
   track matched in the last ``recent`` (5) cycles: a person seen twice in one cycle (two legs, two lasers) is one.
+
+The tracker is given the guards as a part (``NearestNeighbourTracker(duplicates=DuplicateGuard())``; none: neither
+guard), named ``spencer`` in a scenario.
 """
 
 from __future__ import annotations
@@ -18,18 +21,31 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DuplicateGuard"]
+from .params import param
+
+__all__ = ["DUPLICATES", "DuplicateGuard"]
+
+
+def _must_match_within_history(p: dict):
+    if p["must_match"] > p["history"]:
+        return "must_match", f"{p['must_match']}; expected at most history ({p['history']})"
 
 
 @dataclass(frozen=True)
 class DuplicateGuard:
     """The two guards with their parameters (metres, cycles); a distance of 0 turns its guard off."""
 
-    distance: float = 0.15
-    history: int = 10
-    must_match: int = 7
-    clearance: float = 0.25
-    recent: int = 5
+    distance: float = param(0.15, "m, two tracks this close in must_match of their last history cycles are one "
+                                  "person's, and the one matched fewer times goes (SPENCER's duplicate deletion: "
+                                  "0.15); 0: off", min=0.0)
+    history: int = param(10, "cycles of each track's positions compared (SPENCER's: 10)", min=1)
+    must_match: int = param(7, "of them, how many must be this close (SPENCER's: 7)", min=1)
+    clearance: float = param(0.25, "m, no new candidate this close to a track matched in the last recent cycles "
+                                   "(SPENCER's close-by check: 0.25); 0: off", min=0.0)
+    recent: int = param(5, "a track missed fewer cycles in a row than this blocks new candidates (SPENCER's: 5)",
+                        min=1)
+
+    CHECKS = (_must_match_within_history,)
 
     def duplicates(self, past: np.ndarray, filled: np.ndarray, hits: np.ndarray) -> np.ndarray:
         """Which tracks go as duplicates: [n] bool.
@@ -68,6 +84,9 @@ class DuplicateGuard:
             return np.zeros(z.shape[0], bool)
         d2 = (z[:, 0, None] - near[0]) ** 2 + (z[:, 1, None] - near[1]) ** 2
         return (d2 < self.clearance ** 2).any(axis=1)
+
+
+DUPLICATES = {"spencer": DuplicateGuard}
 
 
 def _close_pairs(x: np.ndarray, y: np.ndarray, r: float) -> np.ndarray:

@@ -10,15 +10,21 @@ All tracks at once, as a struct of arrays with the components first and the trac
 loops, slow on loops of 2 to 7): x [d, M, n] (each track's estimate under each of the M models), P [d, d, M, n], mode
 probabilities mu [M, n]. With M = 1 there is no mixing and no mode probability: the plain (extended) Kalman filter.
 The measurement is the position: H = [I 0], z = H x + v, v ~ N(0, R).
+
+``IMM`` is the tracker's filter, given to it as its motion part (``imm`` in a scenario); a single model given in its
+place is an IMM of one (``as_filter``).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from .motion import INITIAL_VARIANCE
+from .motion import INITIAL_VARIANCE, MODELS, layout_with
+from .params import Slot, made, param
 
-__all__ = ["IMM", "kalman_update", "kalman_update_soa"]
+__all__ = ["IMM", "MOTIONS", "MOTION", "as_filter", "kalman_update", "kalman_update_soa"]
 
 
 def kalman_update_soa(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray,
@@ -53,20 +59,46 @@ def kalman_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray,
     return tuple(np.ascontiguousarray(v) for v in rows)
 
 
+MODEL = Slot(MODELS, "cv", ("predict_soa", "on"), "a motion model (pipeline/tracking/motion.py)", "motion model")
+
+
+def _markov(p: dict):
+    k, T = len(p["models"]), p["transition"]
+    rows = [T[i * k:(i + 1) * k] for i in range(k)]
+    if (len(T) != k * k or any(abs(sum(r) - 1.0) > 1e-9 for r in rows)
+            or any(all(r[j] == 0 for r in rows) for j in range(k))):
+        return "transition", (f"{T}; expected the {k} x {k} Markov matrix of the {k} models, row-major: {k * k} "
+                              f"numbers, each row summing to 1, each model reachable")
+
+
+@dataclass(eq=False)
 class IMM:
-    """The filter of M motion models (``pipeline.tracking.motion``) on one state layout; ``transition`` [M, M] is
-    the Markov matrix p_ij = P(model j at this cycle | model i at the last), rows summing to 1 (None when M = 1).
+    """The filter of M motion models (``pipeline.tracking.motion``, or their specifications) on one state layout,
+    the union of theirs; ``transition`` is the Markov matrix p_ij = P(model j at this cycle | model i at the last),
+    M x M or row-major, rows summing to 1 (unused when M = 1).
 
     The tracks' filter state is a dict of arrays, tracks last, the names ``keys``: x [d, M, n], P [d, d, M, n] and,
     with M > 1, the mode probabilities mu [M, n]. Every method returns new arrays (``start`` fills given ones if
     asked).
     """
 
-    def __init__(self, models: list, transition: np.ndarray | None = None):
-        self.models = models
-        self.layout = models[0].layout
-        self.M, self.d = len(models), len(self.layout)
-        self.transition = None if transition is None else np.asarray(transition, float)
+    models: list = param([{"type": "cv", "process_noise": 0.035}, {"type": "cv", "process_noise": 0.267}],
+                         "the IMM's models (seed 000 Sec. V-D, Table II \"+IMM (CV + CV)\": two CV models with q_L = "
+                         "0.035, walking, and 0.267, manoeuvres)", parts=MODEL, min_items=1)
+    transition: list = param([0.95, 0.05, 0.05, 0.95],
+                             "the Markov matrix, row-major, one row per model, rows summing to 1: entry (i, j) is the "
+                             "chance that a person moving by model i at one cycle moves by model j at the next (seed "
+                             "000 gives none: 0.95 to stay keeps a mode for 20 cycles, 0.8 s at 25 Hz, about as long "
+                             "as a walker's turn or stop)", item=dict(min=0.0, max=1.0), min_items=1)
+
+    CHECKS = (_markov,)
+
+    def __post_init__(self):
+        models = [made(m, MODEL) for m in self.models]
+        self.layout = layout_with({c for m in models for c in m.layout[4:]})
+        self.models = [m.on(self.layout) for m in models]
+        self.M, self.d = len(self.models), len(self.layout)
+        self._T = None if self.M == 1 else np.reshape(np.asarray(self.transition, float), (self.M, self.M))
         self.keys = ("x", "P", "mu") if self.M > 1 else ("x", "P")
         self.shapes = dict(zip(self.keys, ((self.d, self.M), (self.d, self.d, self.M), (self.M,))))  # per track
 
@@ -92,7 +124,7 @@ class IMM:
         if self.M == 1:
             x, P = self.models[0].predict_soa(s["x"][:, 0], s["P"][:, :, 0], dt)
             return {"x": x[:, None], "P": P[:, :, None]}
-        mu, T = s["mu"], self.transition
+        mu, T = s["mu"], self._T
         c = T.T @ mu
         w = T[:, :, None] * mu[:, None] / c[None]  # [i, j, n]: P(model i before | model j now)
         x0, P0 = _mix(w.transpose(1, 0, 2), s["x"], s["P"])
@@ -120,6 +152,17 @@ class IMM:
         # relative to the best model, and floored, so that no probability underflows to 0 (nor the sum to 0)
         post = s["mu"] * np.exp(np.maximum(log_l - log_l.max(axis=0), -700.0))
         return {"x": x, "P": P, "mu": post / post.sum(axis=0)}
+
+
+MOTIONS = {**MODELS, "imm": IMM}
+MOTION = Slot(MOTIONS, "cv", ("predict_soa", "on"),
+              "the motion model (seed 000 Eq. 1-2, Sec. III-A, V-D): constant velocity, constant acceleration, "
+              "coordinated turn (EKF), Brownian, or an IMM of several", "motion model")
+
+
+def as_filter(motion) -> IMM:
+    """The tracker's filter from its motion part: an IMM as it is, a single model as an IMM of one."""
+    return motion if isinstance(motion, IMM) else IMM([motion])
 
 
 def _mix(weights: np.ndarray, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

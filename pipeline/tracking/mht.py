@@ -56,7 +56,7 @@ from pipeline.types import DetectedPersons, TrackedPersons
 
 from .association import checked_detections, mahalanobis
 from .imm import kalman_update
-from .motion import ConstantVelocity, state_layout
+from .motion import ConstantVelocity
 
 __all__ = ["MHTParams", "MultiHypothesisTracker", "KBestAssignments", "assignment_matrix"]
 
@@ -285,7 +285,7 @@ class MultiHypothesisTracker:
         """``params``: the keywords of ``MHTParams`` (its defaults for those left out)."""
         self.params = MHTParams(**params)
         self.frame = frame
-        self._motion = ConstantVelocity(state_layout(("cv",)), self.params.process_noise)
+        self._motion = ConstantVelocity(self.params.process_noise)
         self.reset()
 
     def reset(self) -> None:
