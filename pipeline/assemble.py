@@ -2,8 +2,9 @@
 name, and ``build_pipeline``, which makes the parts a scenario's (validated) ``pipeline`` section names.
 
 A part is named by its type, a built-in one below or ``module.path:ClassName``, and made as ``cls(**params)`` with
-the section's other keys; every part starts over with ``reset()``. The scenario format (scenarios/format.py) holds
-each built-in type's parameters under the same names; a test keeps the two registries equal.
+the section's other keys; every part starts over with ``reset()``. The built-in detectors, fusions and group stages
+are their packages' (``pipeline.detectors.DETECTORS``, ``pipeline.fusion.FUSIONS``, ``pipeline.groups.GROUP_STAGES``),
+each declaring its parameters on its class, where the scenario format (scenarios/format.py) reads them.
 """
 
 from __future__ import annotations
@@ -15,13 +16,9 @@ from typing import Protocol, Sequence
 
 from scenarios.schema import ScenarioError, import_class
 
-from .detectors.laser_segments import SegmentDetector
-from .detectors.learned_segments import LearnedSegmentDetector
-from .detectors.legs import LegDetector
-from .detectors.rgbd import RgbdPeopleDetector
-from .detectors.wall_camera import WallCameraDetector
-from .fusion import NearestFusion
-from .groups import CoherentMotionGroups
+from .detectors import DETECTORS
+from .fusion import FUSIONS
+from .groups import GROUP_STAGES
 from .map_filter import MapFilter
 from .tracking.mht import MultiHypothesisTracker
 from .tracking.nnt import NearestNeighbourTracker
@@ -66,13 +63,8 @@ class GroupStage(Protocol):
     def reset(self) -> None: ...
 
 
-DETECTORS: dict[str, type] = {"laser_segments": SegmentDetector, "laser_learned": LearnedSegmentDetector,
-                              "laser_legs": LegDetector, "wall_people": WallCameraDetector,
-                              "rgbd_people": RgbdPeopleDetector}
-FUSIONS: dict[str, type] = {"nearest": NearestFusion}
 TRACKERS: dict[str, type] = {"nnt": NearestNeighbourTracker, "mht": MultiHypothesisTracker,
                              "rjmcmc": RjmcmcTracker, "rgbd": RgbdTracker}
-GROUP_STAGES: dict[str, type] = {"coherent_motion": CoherentMotionGroups}
 
 
 @dataclass
@@ -196,9 +188,7 @@ def build_pipeline(spec: dict, lasers: Sequence[str], floor_plan: dict | None = 
                  if own.get(name, spec["detector"]) is not None}
     map_filter = None
     if spec["map_filter"] is not None and floor_plan is not None:
-        params = dict(spec["map_filter"])
-        obstacles = floor_plan["obstacles"] if params.pop("obstacles", True) else []
-        map_filter = MapFilter(floor_plan["walls"], obstacles, **params)
+        map_filter = MapFilter(floor_plan["walls"], floor_plan["obstacles"], **spec["map_filter"])
     return Pipeline(detectors, build_part(spec["fusion"], FUSIONS, source, "pipeline.fusion"),
                     build_part(spec["tracker"], TRACKERS, source, "pipeline.tracker"),
                     build_part(spec["groups"], GROUP_STAGES, source, "pipeline.groups"), map_filter)

@@ -3,10 +3,13 @@ merged greedily nearest first when closer than a distance, so a person seen by t
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.spatial.distance import cdist
 
 from .frames import rotate_covariances, rotation, transform_points
+from .params import param
 from .types import DetectedPersons
 
 
@@ -82,11 +85,13 @@ def _mean_rows(batches: list[DetectedPersons], name: str, inv: np.ndarray, count
     return out / np.maximum(count, 1).reshape(-1, *[1] * (rows.ndim - 1))
 
 
+@dataclass(eq=False)
 class NearestFusion:
     """The ``nearest`` fusion: ``fuse`` on each cycle's batches, the fused ids counted over the run."""
 
-    def __init__(self, distance: float = 0.4):
-        self.distance = distance
+    distance: float = param(0.4, "m, detections of two sensors nearer than this are one person", min=0.0)
+
+    def __post_init__(self):
         self.reset()
 
     def reset(self) -> None:
@@ -96,3 +101,6 @@ class NearestFusion:
         fused = fuse(batches, self.distance, self._next_id)
         self._next_id += len(fused)
         return fused
+
+
+FUSIONS: dict[str, type] = {"nearest": NearestFusion}

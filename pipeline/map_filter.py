@@ -10,12 +10,15 @@ Detections are in the tracking frame (odom); the robot's localisation in the map
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.signal import fftconvolve
 
 from scenarios.geometry import inside_polygon, wall_segments
 
 from .frames import transform_points
+from .params import param
 from .types import DetectedPersons
 
 
@@ -47,22 +50,34 @@ def occupancy_grid(walls: list, obstacles: list, resolution: float, margin: floa
     return occupied, origin
 
 
+@dataclass(eq=False)
 class MapFilter:
     """Drops detections whose circle of radius ``inflation`` holds more than ``max_occupied`` of occupied cells
     (seed 000 Sec. V-C: a 15 cm circle, rejected when under 90% of it is free; ``max_occupied`` 0: any occupied
     cell within ``inflation`` rejects). Detections off the grid (beyond the map) are kept: nothing is known there.
-    The map is a scenario's ``map``: ``walls`` (polylines) and ``obstacles`` (closed polygons), in the world frame."""
+    The map is a scenario's ``map``: ``walls`` (polylines) and its obstacles, ``polygons`` (closed), in the world
+    frame; it is no parameter of the filter but the robot's map, given with it."""
 
-    def __init__(self, walls: list, obstacles: list, resolution: float = 0.05, inflation: float = 0.15,
-                 max_occupied: float = 0.1):
-        self.resolution = resolution
-        self.occupied, self.origin = occupancy_grid(walls, obstacles, resolution, inflation + resolution)
-        r = int(np.floor(inflation / resolution + 1e-9))
-        offsets = np.arange(-r, r + 1) * resolution
-        disc = (np.hypot(*np.meshgrid(offsets, offsets)) <= inflation + 1e-9).astype(float)
+    walls: list
+    polygons: list
+    resolution: float = param(0.05, "m, cell size of the occupancy grid made from the map (a common ROS map's; an "
+                                    "assumption)", min=0.0, exclusive_min=True)
+    inflation: float = param(0.15, "m, radius of the circle checked round each detection (seed 000: 15 cm)", min=0.0)
+    max_occupied: float = param(0.1, "share of the circle's cells that may be occupied (seed 000: rejected when under "
+                                     "90% free; 0: any occupied cell rejects)", min=0.0, max=1.0)
+    obstacles: bool = param(True, "the map's obstacles block detections as its walls do (false: walls only, for a map "
+                                  "that leaves out furniture, which moves)")
+
+    def __post_init__(self):
+        polygons = self.polygons if self.obstacles else []
+        self.occupied, self.origin = occupancy_grid(self.walls, polygons, self.resolution,
+                                                    self.inflation + self.resolution)
+        r = int(np.floor(self.inflation / self.resolution + 1e-9))
+        offsets = np.arange(-r, r + 1) * self.resolution
+        disc = (np.hypot(*np.meshgrid(offsets, offsets)) <= self.inflation + 1e-9).astype(float)
         # occupied cells within the circle of each cell, counted exactly (rounded off the FFT's float error)
         near = np.rint(fftconvolve(self.occupied.astype(float), disc, mode="same"))
-        self.blocked = near > max_occupied * disc.sum() + 1e-9
+        self.blocked = near > self.max_occupied * disc.sum() + 1e-9
 
     def keep(self, xy_world: np.ndarray) -> np.ndarray:
         """Which of the points [n, 2] (world) may be persons: off the blocked cells."""

@@ -7,26 +7,27 @@ from __future__ import annotations
 
 import math
 
+from pipeline.detectors import DETECTORS
+from pipeline.fusion import FUSIONS
+from pipeline.groups import GROUP_STAGES
+from pipeline.map_filter import MapFilter
+from pipeline.navigation.planners import PLANNERS
+from pipeline.params import ordered as _ordered
+from pipeline.tracking.mht import MHTParams
 from pipeline.tracking.nnt import NearestNeighbourTracker
+from pipeline.tracking.rgbd_tracker import RgbdTracker
+from pipeline.tracking.rjmcmc import RjmcmcTracker
 
 from .costs import laser_beams
 from .laser_presets import LASER_PRESETS
-from .schema import Field, ListOf, MapOf, Schema, ScenarioError, Typed, slot_field, validate
+from .schema import Field, ListOf, MapOf, Schema, ScenarioError, Typed, schema_of, slot_field, validate
 
 F = Field
-INIT_CONFIDENCE = 0.325  # the shipped robot-camera HOG model's track-start score (train-hog --camera robot prints it)
 
 
 # Checks across a part's keys, run when the file is loaded (scenarios.schema.Schema.checks): each takes the part's
 # validated values and returns None, or the key at fault and what was expected. They are the rules the parts'
 # constructors hold, so a file that breaks one gets one error naming the key before anything is built.
-
-def _ordered(low: str, high: str, strict: bool = False):
-    def check(p: dict):
-        if p[low] > p[high] or (strict and p[low] == p[high]):
-            return low, f"{p[low]:g}; expected {'below' if strict else 'at most'} {high} ({p[high]:g})"
-    return check
-
 
 def _extent(key: str):
     def check(p: dict):
@@ -41,43 +42,6 @@ def _two_beams(p: dict):
     if beams < 2:
         return "resolution_deg", (f"{p['resolution_deg']:g} deg over fov_deg {p['fov_deg']:g} gives {beams:.0f} beam; "
                                   "expected at least 2 beams (a finer resolution or a wider field of view)")
-
-
-def _sectors(p: dict):
-    if p["sectors"] % 4:
-        return "sectors", f"{p['sectors']}; expected a multiple of 4 (the nearness diagram's quadrants)"
-
-
-def _foreground_or_hog(p: dict):
-    if not (p["foreground"] or p["hog"]):
-        return "hog", "false with foreground false too; expected at least one of foreground and hog on"
-
-
-def _up_direction(p: dict):
-    if math.hypot(*p["up"]) < 1e-6:
-        return "up", f"{p['up']}; expected a direction (a non-zero vector), e.g. [0, -1, 0]: y is down in the image"
-
-
-def _outcomes_sum_to_one(p: dict):
-    total = p["p_det"] + p["p_occ"] + p["p_del"]
-    if abs(total - 1.0) > 1e-9:
-        return "p_del", f"p_det + p_occ + p_del = {total:g}; expected 1 (seed 000 Sec. IV-C)"
-
-
-def _rjmcmc_sources(p: dict):
-    w = p["weights"]
-    for key in ("proposal_sources", "likelihood_sources"):
-        if not any(w.get(s, 0.0) > 0 for s in p[key]):
-            return key, f"{p[key]}; expected at least one source with a positive weight under weights"
-    missing = [s for s in p["likelihood_sources"] if w.get(s, 0.0) > 0 and s not in p["clutter"]]
-    if p["likelihood"] == "pooled" and missing:
-        return "clutter", f"has no rate for {', '.join(missing)}; expected one for each likelihood source"
-
-
-def _move_probabilities(p: dict):
-    q = p["move_probabilities"]
-    if len(q) != 4 or abs(sum(q) - 1.0) > 1e-9:
-        return "move_probabilities", f"{q}; expected 4 values (add, update, remove, swap) summing to 1"
 
 
 AGENT_TYPE = Schema({
@@ -203,68 +167,9 @@ ODOMETRY = Schema({
                                 doc="rad/sqrt(m): heading error variance per metre driven"),
 })
 
-# The robot's local planners (pipeline/navigation/planners.py builds them; a test keeps these defaults equal to the
-# classes'). A built-in planner also gets the robot's radius, max_speed, max_angular_speed and max_acceleration.
-PLANNER_COMMON = {
-    "goal_tolerance": F("float", 0.1, min=0.0,
-                        doc="m, the planner stops this near its goal (well inside the follower's band; an assumption)"),
-    "stop_margin": F("float", 0.05, min=0.0,
-                     doc="m, every planner brakes to stop this short of the nearest laser return in its path (an "
-                         "assumption)"),
-}
-ND_PLANNER = {
-    **PLANNER_COMMON,
-    "security_distance": F("float", 0.5, min=0.0, exclusive_min=True,
-                           doc="m, ds: obstacles nearer the robot's edge are dangerous (Player's nd driver, avoid_dist)"),
-    "sectors": F("int", 180, min=8, doc="sectors of the nearness diagram, a multiple of 4 (Minguez's SECTORES)"),
-    "wide_fraction": F("float", 0.25, min=0.0, exclusive_min=True, max=1.0,
-                       doc="a region wider than this share of the sectors is wide (Minguez & Montano 2004)"),
-}
-PLANNER_TYPES = {
-    "zone": Schema({
-        **ND_PLANNER,
-        "zone_radius": F("float", 0.5, min=0.0, exclusive_min=True,
-                         doc="m, r: the disc round each tracked person (seed 001 Fig. 11)"),
-        "zone_reach": F("float", 1.5, min=0.0, exclusive_min=True,
-                        doc="m, R: the sector ahead of a walking person (seed 001 Fig. 11)"),
-        "zone_opening_deg": F("float", 30.0, min=0.0, exclusive_min=True, max=180.0,
-                              doc="deg, omega: the sector's full opening (seed 001 Fig. 11; "
-                                  "pipeline/navigation/zones.py says why full)"),
-        "standing_speed": F("float", 0.25, min=0.0,
-                            doc="m/s, slower tracks get the disc alone (above the tracker's speed for a person "
-                                "standing still; pipeline/navigation/zones.py)"),
-        "zone_rays": F("int", 360, min=8, doc="rays that read the zones as a scan (two per ND sector)"),
-        "zone_security_distance": F("float", 0.2, min=0.0, exclusive_min=True,
-                                    doc="m, ND's security distance for the zones (a zone is a margin already; "
-                                        "pipeline/navigation/planners.py says why 0.2)"),
-        "yield_time": F("float", 2.0, min=0.0,
-                        doc="s, give way to a passer-by crossing the robot's course ahead within this time (0: "
-                            "never; an addition to seed 001, pipeline/navigation/planners.py)"),
-    }, checks=(_sectors,)),
-    "nd": Schema(ND_PLANNER, checks=(_sectors,)),
-    "straight": Schema({
-        **PLANNER_COMMON,
-        "safety_distance": F("float", 0.6, min=0.0, doc="m, stop for a laser return this near ahead (robot.safety_distance)"),
-        "heading_gain": F("float", 2.0, min=0.0, doc="1/s, omega = gain x heading error (the route driver's)"),
-        "drive_cone_deg": F("float", 60.0, min=0.0, max=180.0,
-                            doc="deg, drive only with the goal this near the heading (the route driver's)"),
-        "corridor_margin": F("float", 0.1, min=0.0, doc="m, the path checked is the robot's width plus this each side"),
-    }),
-    "social_force": Schema({
-        **PLANNER_COMMON,
-        "relaxation_time": F("float", 0.5, min=0.0, doc="s, tau (Helbing & Molnar 1995)"),
-        "person_strength": F("float", 2.1, min=0.0, doc="m^2/s^2, V0 of the pedestrian potential (HM 1995)"),
-        "person_range": F("float", 0.3, min=0.0, exclusive_min=True, doc="m, sigma of that potential (HM 1995)"),
-        "obstacle_strength": F("float", 10.0, min=0.0, doc="m^2/s^2, U0 of the wall potential (HM 1995)"),
-        "obstacle_range": F("float", 0.2, min=0.0, exclusive_min=True, doc="m, R of the wall potential (HM 1995)"),
-        "fov_deg": F("float", 200.0, min=0.0, max=360.0, doc="deg, 2 phi, the field of view (HM 1995)"),
-        "out_of_view_weight": F("float", 0.5, min=0.0, max=1.0, doc="c, weight of what is out of view (HM 1995)"),
-        "obstacle_sectors": F("int", 36, min=1, doc="laser returns count once per sector (an assumption)"),
-        "person_radius": F("float", 0.4, min=0.0,
-                           doc="m, laser returns this near a track are that person's (body 0.25 m plus track "
-                               "error; an assumption)"),
-    }),
-}
+# The robot's local planners (pipeline/navigation/planners.py builds them; each declares its keys on its class). A
+# built-in planner also gets the robot's radius, max_speed, max_angular_speed and max_acceleration.
+PLANNER_TYPES = {name: schema_of(cls) for name, cls in PLANNERS.items()}
 # a class of one's own: made as Class(**keys), with command(stamp, pose, velocity, obstacles, tracks, goal) and reset()
 PLANNER = Typed(PLANNER_TYPES, "zone", "planner", ("command", "reset"))
 
@@ -396,119 +301,16 @@ WALL_CAMERA = Schema({
     "rgb": F("bool", True, doc="render a colour image (the segmentation and boxes come without it)"),
 })
 
-# The pipeline's parts (pipeline/assemble.py builds them): each role has its built-in types, each type its own
-# parameters; `type: module.path:ClassName` names a class of your own instead. The names are assemble's (a test
-# keeps the two registries equal, and each type's defaults equal to its class's).
+# The pipeline's parts (pipeline/assemble.py builds them): each role has its built-in types, each type the
+# parameters its class declares (where each default comes from is said there), by the names of its package's
+# registry; `type: module.path:ClassName` names a class of your own instead.
 
-SEGMENT_DETECTOR = Schema({
-    "jump_distance": F("float", 0.4, min=0.0, exclusive_min=True, doc="m, seed 000 Sec. 4.2: 0.4 m"),
-    "min_points": F("int", 3, min=1, doc="seed 000 Sec. IV-C: far echoes of fewer than 3 points are unreliable"),
-    "min_width": F("float", 0.1, min=0.0, doc="m, narrowest segment taken for a person"),
-    "max_width": F("float", 0.9, min=0.0, doc="m, widest segment taken for a person"),
-    "min_bulge": F("float", 0.03, min=0.0,
-                   doc="m, least mean depth of the interior points behind the chord (walls are flat)"),
-    "position_variance": F("float", 0.1, min=0.0, exclusive_min=True,
-                           doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)"),
-})
-
-LEARNED_DETECTOR = Schema({
-    "model": F("str", "forest",
-               doc="adaboost (Arras et al. 2007's boosted stumps, seed 000 Sec. II-A), forest (15 trees of depth 10, "
-                   "seed 000 Sec. III-A: best there), or the path of a .json/.npz model `crowdsim experiment "
-                   "train-detector --out` wrote"),
-    "threshold": F("float", None, min=0.0, max=1.0, optional=True,
-                   doc="least person probability detected; left out: the model's own (peak F1 on validation seeds)"),
-    "jump_distance": F("float", 0.4, min=0.0, exclusive_min=True, doc="m, seed 000 Sec. 4.2: 0.4 m"),
-    "min_points": F("int", 3, min=1, doc="seed 000 Sec. IV-C: far echoes of fewer than 3 points are unreliable"),
-    "position_variance": F("float", 0.1, min=0.0, exclusive_min=True,
-                           doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)"),
-})
-
-# seed 001 Sec. 4.1 gives the steps and Xavier et al. 2005's properties but no threshold: ours are chosen on this
-# testbed's legs (pipeline/detectors/legs.py says how)
-LEG_DETECTOR = Schema({
-    "jump_distance": F("float", 0.08, min=0.0, exclusive_min=True, doc="m, consecutive returns farther apart start a "
-                                                                      "new blob"),
-    "min_points": F("int", 3, min=3, doc="returns of a leg (an inscribed angle needs an interior one)"),
-    "min_width": F("float", 0.05, min=0.0, exclusive_min=True, doc="m, narrowest leg (first to last return)"),
-    "max_width": F("float", 0.15, min=0.0, exclusive_min=True, doc="m, widest leg"),
-    "min_angle_deg": F("float", 90.0, min=0.0, max=180.0, doc="deg, least mean inscribed angle (a half circle's)"),
-    "max_angle_deg": F("float", 160.0, min=0.0, max=180.0, doc="deg, largest mean inscribed angle (flatter is a wall)"),
-    "max_angle_sd_deg": F("float", 30.0, min=0.0, doc="deg, largest spread of the inscribed angles (a circle's: 0)"),
-    "sharp_angle_deg": F("float", 60.0, min=0.0, max=180.0,
-                         doc="deg, a blob with a sharper inscribed angle is a sharp structure, no leg"),
-    "pair_distance": F("float", 0.5, min=0.0, doc="m, farthest two legs of one person"),
-    "single_legs": F("bool", True, doc="a leg without a partner is a person too (the other hidden behind it)"),
-    "blobs": F("bool", False, doc="also give the raw blobs: the named batches `legs` and `blobs` (seed 001's l_b, "
-                                  "which the rjmcmc tracker's likelihood weighs)"),
-    "blob_min_radius": F("float", 0.03, min=0.0, doc="m, least half-width of a raw blob (thinner: a table leg)"),
-    "blob_max_radius": F("float", 0.3, min=0.0, doc="m, largest half-width of a raw blob (wider: a wall)"),
-    "position_variance": F("float", 0.05, min=0.0, exclusive_min=True, doc="m^2, of each person's position"),
-}, checks=(_ordered("min_width", "max_width"), _ordered("min_angle_deg", "max_angle_deg")))
-
-# seed 001 Sec. 4.2-4.3 names the methods (Sigma-Delta, morphology, an aspect ratio; HOG) but gives no parameter
-WALL_CAMERA_DETECTOR = Schema({
-    "foreground": F("bool", True, doc="Sigma-Delta foreground blobs (the batch `fseg`)"),
-    "hog": F("bool", True, doc="HOG person windows (the batch `hog`)"),
-    "model": F("str", None, optional=True,
-               doc="the HOG model: left out, the shipped one (`crowdsim experiment train-hog`); or the path of the "
-                   ".npz it wrote with --out"),
-    "hog_scales": F(ListOf(F("float", min=0.1), min_items=1), [float(1.2 ** k) for k in range(8)],
-                    doc="window scales searched (1: 64 x 128 pixels); the default covers a person 2.2-8 m from a "
-                        "640 x 480 camera at 45 degrees"),
-    "bootstrap": F("int", 15, min=1, doc="frames whose median starts the background model (no detection before)"),
-    "min_area": F("int", 150, min=1, doc="pixels, least foreground blob"),
-    "min_aspect": F("float", 1.2, min=0.0, doc="least height / width of a foreground blob"),
-    "max_aspect": F("float", 5.0, min=0.0, doc="largest height / width of a foreground blob"),
-    "robot_radius": F("float", 0.5, min=0.0,
-                      doc="m, a detection whose floor point is this near the robot is the robot, masked out (Rackham's "
-                          "0.26 m and a margin for the foot point's error)"),
-    "position_variance": F("float", 0.09, min=0.0, exclusive_min=True,
-                           doc="m^2 along the floor (seed 001 Table 1: Sigma = diag(0.09, 0.09))"),
-}, checks=(_foreground_or_hog,))
-
-# seed 003's RGB-D detector (Munaro & Menegatti Sec. 3); the paper gives the head distance and voxels under 0.1 m
-# (Table 7), the rest are its authors' released code's (PCL's ground-based people detection), see
-# pipeline/detectors/head_clusters.py
-RGBD_DETECTOR = Schema({
-    "voxel": F("float", 0.06, min=0.0, exclusive_min=True, max=0.1,
-               doc="m, the voxel grid's leaf (Table 7: below 0.1; PCL's 0.06)"),
-    "cluster_tolerance": F("float", 0.15, min=0.0, exclusive_min=True,
-                           doc="m, largest gap between neighbours of a Euclidean cluster (PCL: two voxels, 0.12 m; "
-                               "our bodies' torso ends in a flat top 12 cm wider than the neck all round, and from "
-                               "below a camera sees a gap there: at 0.12 m a person 2-3 m away loses their head)"),
-    "head_distance": F("float", 0.3, min=0.0, exclusive_min=True,
-                       doc="m, least distance between two people's heads when a cluster is split (Table 7)"),
-    "up": F("point3", [0.0, -1.0, 0.0], doc="the floor's up direction in the camera's optical frame, roughly (y is "
-                                            "down): the first ground plane is searched near it"),
-    "max_tilt_deg": F("float", 30.0, min=0.0, max=90.0, doc="deg, the first ground plane's largest tilt from `up`"),
-    "sub_clustering": F("bool", True, doc="split clusters at their heads (seed 003 Sec. 3.1.1; false: Table 2's "
-                                          "\"No sub.\" row)"),
-    "hog": F("bool", True, doc="score each candidate's box with the HOG classifier and keep those above threshold"),
-    "model": F("str", None, optional=True,
-               doc="the HOG model: left out, the shipped one (`crowdsim experiment train-hog --camera robot`); or the "
-                   "path of the .npz it wrote with --out"),
-    "threshold": F("float", None, optional=True,
-                   doc="least HOG score of a detection; left out: the model's (the score 97% of its validation "
-                       "people pass, as seed 003 keeps it low: Sec. 4.1.2)"),
-    "colour_space": F("str", "rgb", choices=("rgb", "hsv"),
-                      doc="the detections' colour histograms (Tables 2-5: RGB; Table 7 recommends HSV); the tracker's "
-                          "colour_space must be the same"),
-    "position_variance": F("float", 0.036, min=0.0, exclusive_min=True,
-                           doc="m^2 along the floor (the authors' later tracker: 30 (2 voxel)^2 / 12 at 0.06 m)"),
-}, checks=(_up_direction,))
-
-DETECTOR_TYPES = {"laser_segments": SEGMENT_DETECTOR, "laser_learned": LEARNED_DETECTOR, "laser_legs": LEG_DETECTOR,
-                  "wall_people": WALL_CAMERA_DETECTOR, "rgbd_people": RGBD_DETECTOR}
+DETECTOR_TYPES = {name: schema_of(cls) for name, cls in DETECTORS.items()}
 # the `sensors` list whose frames each built-in detector reads
 DETECTOR_READS = {"laser_segments": "lasers", "laser_learned": "lasers", "laser_legs": "lasers",
                   "wall_people": "wall_cameras", "rgbd_people": "depth_cameras"}
 
-NEAREST_FUSION = Schema({
-    "distance": F("float", 0.4, min=0.0, doc="m, detections of two sensors nearer than this are one person"),
-})
-
-FUSION_TYPES = {"nearest": NEAREST_FUSION}
+FUSION_TYPES = {name: schema_of(cls) for name, cls in FUSIONS.items()}
 
 # the NNT (pipeline/tracking/nnt.py): its parts, each named by type with the parameters its class declares (where
 # each default comes from is said there)
@@ -611,159 +413,18 @@ def _as_old(spec: dict, typed: Typed, source: str, where: str, part: str, moved:
 
 NNT = Schema({name: slot_field(slot) for name, slot in NearestNeighbourTracker.PARTS.items()}, upgrade=_flat_nnt)
 
-MHT = Schema({
-    "process_noise": F("float", 0.267, min=0.0, exclusive_min=True,
-                       doc="m^2/s^3, q_L of the CV model: the NNT's (seed 000 Sec. IV-C)"),
-    "gate_chi2": F("float", 13.82, min=0.0, exclusive_min=True, doc="Mahalanobis gate (chi2 0.999 for 2 dof)"),
-    "p_det": F("float", 0.7, min=0.0, exclusive_min=True, max=1.0,
-               doc="probability a track is detected in a cycle (seed 000 Sec. IV-C)"),
-    "p_occ": F("float", 0.27, min=0.0, exclusive_min=True, max=1.0,
-               doc="probability a track is occluded in a cycle (seed 000 Sec. IV-C)"),
-    "p_del": F("float", 0.03, min=0.0, exclusive_min=True, max=1.0,
-               doc="probability a track is deleted in a cycle (seed 000 Sec. IV-C); p_det + p_occ + p_del = 1"),
-    "lambda_new": F("float", 0.005, min=0.0, exclusive_min=True,
-                    doc="1/(m^2 cycle), Poisson rate of new tracks (seed 000 Sec. IV-C)"),
-    "lambda_fal": F("float", 0.005, min=0.0, exclusive_min=True,
-                    doc="1/(m^2 cycle), Poisson rate of false alarms (seed 000 Sec. IV-C)"),
-    "n_scan": F("int", 30, min=1, doc="cycles of n-scanback pruning (seed 000 Sec. IV-C: 30)"),
-    "n_delete": F("int", 10, min=1, doc="cycles without a detection that delete a track (seed 000 Sec. IV-C: 10)"),
-    "max_hypotheses": F("int", 50, min=1,
-                        doc="hypotheses generated per cycle, in place of seed 000's t_max = 0.03 s so results do "
-                            "not depend on the machine (about 0.03 s with 80 people; pipeline/tracking/mht.py)"),
-    "n_confirm": F("int", 3, min=1, doc="detections before a track is output (the NNT's)"),
-    "initial_velocity_variance": F("float", 1.0, min=0.0, exclusive_min=True, doc="m^2/s^2 of a new track"),
-}, checks=(_outcomes_sum_to_one,))
-
-# seed 001's RJMCMC particle filter (pipeline/tracking/rjmcmc.py; its Table 1 unless said; a test keeps these
-# defaults equal to the class's)
-RJMCMC = Schema({
-    "weights": F(MapOf(F("float", min=0.0)),
-                 {"laser/legs": 0.16, "laser/blobs": 0.16, "camera_1/fseg": 0.22, "camera_1/hog": 0.2,
-                  "camera_2/fseg": 0.22, "camera_2/hog": 0.2},
-                 doc="k_d per detection source (`sensor/batch`, as the detectors name their batches; Table 1)"),
-    "proposal_sources": F(ListOf(F("str")), ["laser/legs", "camera_1/fseg", "camera_1/hog", "camera_2/fseg",
-                                             "camera_2/hog"],
-                          doc="the sources where targets are born (Eq. 2: the leg detector's persons and the "
-                              "cameras')"),
-    "likelihood_sources": F(ListOf(F("str")), ["laser/blobs", "camera_1/fseg", "camera_1/hog", "camera_2/fseg",
-                                               "camera_2/hog"],
-                            doc="the sources the likelihood weighs (Eq. 5: the laser's raw blobs l_b and the "
-                                "cameras')"),
-    "move_probabilities": F(ListOf(F("float", min=0.0, max=1.0), min_items=4), [0.15, 0.8, 0.02, 0.03],
-                            doc="q_m of add, update, remove, swap (Table 1)"),
-    "step_variance": F("float", 0.09, min=0.0, exclusive_min=True,
-                       doc="m^2, Sigma of the random walk and of every Gaussian kernel (Table 1)"),
-    "interaction_sd": F("float", 0.75, min=0.0, exclusive_min=True, doc="m, sigma of the MRF (Eq. 4, Table 1)"),
-    "samples": F("int", 150, min=1, doc="N, particles kept per cycle (Table 1)"),
-    "burn_in": F("int", 40, min=0, doc="N_B, burn-in steps per cycle (Table 1)"),
-    "likelihood": F("str", "pooled", choices=("pooled", "mean"),
-                    doc="pooled: each source's detections a Poisson process of clutter and of the targets, the sources "
-                        "pooled with the weights k_d, each target with a prior (ours); mean: Eq. 5 as written"),
-    "p_detect": F("float", 0.7, min=0.0, exclusive_min=True, max=1.0,
-                  doc="pooled: chance that a source sees a person in its view"),
-    "clutter": F(MapOf(F("float", min=0.0, exclusive_min=True)),
-                 {"laser/blobs": 0.08, "camera_1/fseg": 0.003, "camera_1/hog": 0.006, "camera_2/fseg": 0.003,
-                  "camera_2/hog": 0.006},
-                 doc="pooled: false detections per m^2 and cycle of each likelihood source (measured on training "
-                     "sequences of seed 001's room)"),
-    "looks": F("float", 2.0, min=0.0, exclusive_min=True,
-               doc="pooled: the independent sources whose evidence the weights k_d (summing to 1) share out"),
-    "newcomer": F("float", 0.0003, min=0.0, exclusive_min=True,
-                  doc="pooled: prior odds of a person not tracked before, per kernel area (2 pi Sigma = 0.57 m^2)"),
-    "survival": F("float", 0.6, min=0.0, exclusive_min=True, max=0.999,
-                  doc="pooled: chance that a tracked person is still there a cycle later"),
-    "birth_floor": F("float", 0.01, min=0.0, exclusive_min=True,
-                     doc="least birth density (kernel units): where no detection is, a target can still be removed"),
-    "colour_lambda": F("float", 20.0, min=0.0, doc="lambda of exp(-lambda B^2) (Perez et al. 2002; seed 001: none)"),
-    "alpha": F("float", 0.9, min=0.0, max=1.0, doc="colour model update weight (Eq. 6, Table 1)"),
-    "update_threshold": F("float", 0.24, min=0.0, max=1.0, doc="beta_t: the model follows only closer histograms"),
-    "reid_threshold": F("float", 0.1, min=0.0, max=1.0, doc="beta_o: a new id this close to a gone person's model "
-                                                             "takes their id"),
-    "seed": F("int", 0, doc="the filter's random stream (one run = one draw; seed 001 reports eight)"),
-}, checks=(_rjmcmc_sources, _move_probabilities))
-
-# seed 003's tracker (pipeline/tracking/rgbd_tracker.py): Table 7 where it gives a value, else the authors' later
-# OpenPTrack's (tracker.yaml) and their AdaBoost demo's; a test keeps these defaults equal to the class's
-RGBD_TRACKER = Schema({
-    "frame": F("str", "odom", doc="the tracks' frame (the detections')"),
-    "motion_weight": F("float", 0.5, min=0.0, doc="gamma of the Mahalanobis distance in the joint cost (Table 7)"),
-    "appearance_weight": F("float", 30.0, min=0.0,
-                           doc="alpha of the colour classifier's confidence (Table 7: 30-100; 0: no colour term)"),
-    "detector_weight": F("float", 1.0, min=0.0, doc="beta of the HOG score (Table 7)"),
-    "acceleration_variance": F("float", 100.0, min=0.0, exclusive_min=True,
-                               doc="m^2/s^4, white acceleration of the constant-velocity model (OpenPTrack)"),
-    "initial_velocity_variance": F("float", 100.0, min=0.0, exclusive_min=True,
-                                   doc="m^2/s^2, a new track's velocity variance (OpenPTrack)"),
-    "use_velocity": F("bool", True, doc="the Mahalanobis distance over position and velocity (false: position only, "
-                                        "seed 003's RGB-D People test)"),
-    "velocity_lag": F("float", 1.0, min=0.0, exclusive_min=True,
-                      doc="s, a detection's velocity is measured from the track's position 1-2 lags back (OpenPTrack)"),
-    "gate_probability": F("float", 0.999, min=0.0, exclusive_min=True, max=0.999999,
-                          doc="chi-square gate on the Mahalanobis distance (OpenPTrack)"),
-    "init_confidence": F("float", INIT_CONFIDENCE, doc="least HOG score of a detection that starts or validates a "
-                                                       "track: the shipped robot-camera model's, passed by 90% of its "
-                                                       "validation people (Table 7's [-1, -0.5] on the paper's scale)"),
-    "confirm": F("int", 3, min=1, doc="detections at init_confidence that confirm a new track (OpenPTrack)"),
-    "confirm_time": F("float", 2.4, min=0.0, doc="s, an unconfirmed track is dropped after this (OpenPTrack)"),
-    "max_missed_time": F("float", 8.0, min=0.0, doc="s without a detection before a track is deleted (OpenPTrack)"),
-    "report_time": F("float", 0.1, min=0.0,
-                     doc="s since its latest detection that a track is still reported (kept, unreported, to "
-                         "max_missed_time for a person who comes back; chosen on training seed 100 of the KTP "
-                         "room: 0 s, 0.1, 0.2, 0.5 gave MOTA 96.2, 94.8, 93.5, 88.6% with 59, 10, 7, 9 ID switches)"),
-    "clearance": F("float", 0.3, min=0.0,
-                   doc="m: no track starts this near a track that took a detection in the cycle (Table 7: heads "
-                       "are at least 0.3 m apart)"),
-    "learn": F("bool", True, doc="the colour classifiers keep learning (false: frozen after their first cycle, "
-                                 "seed 003's ablation)"),
-    "learn_interval": F("float", 1.0, min=0.0,
-                        doc="s between a track's learning cycles, one track a cycle (0: every track every cycle; an "
-                            "update costs about 0.5 ms here)"),
-    "random_windows": F("int", 10, min=0, doc="random image windows learnt as negatives (the authors' demo)"),
-    "colour_space": F("str", "rgb", choices=("rgb", "hsv"), doc="of the histograms; the detector's must be the same"),
-    "bins": F("int", 16, min=2, doc="histogram bins a channel (seed 003 Sec. 3.2.1)"),
-    "pool": F("int", 250, min=1, doc="weak classifiers (Table 7)"),
-    "selectors": F("int", 50, min=1, doc="selectors of the strong classifier (Table 7)"),
-    "seed": F("int", 0, doc="the classifiers' and windows' random stream"),
-})
+# the other trackers declare their parameters on their classes (where each default comes from is said there)
+MHT = schema_of(MHTParams)
+RJMCMC = schema_of(RjmcmcTracker)
+RGBD_TRACKER = schema_of(RgbdTracker)
 
 TRACKER_TYPES = {"nnt": NNT, "mht": MHT, "rjmcmc": RJMCMC, "rgbd": RGBD_TRACKER}
 
-# seed 000 Sec. V-C's static-map filter (pipeline/map_filter.py; a test keeps these defaults equal to the class's)
-MAP_FILTER = Schema({
-    "resolution": F("float", 0.05, min=0.0, exclusive_min=True,
-                    doc="m, cell size of the occupancy grid made from the map (a common ROS map's; an assumption)"),
-    "inflation": F("float", 0.15, min=0.0,
-                   doc="m, radius of the circle checked round each detection (seed 000: 15 cm)"),
-    "max_occupied": F("float", 0.1, min=0.0, max=1.0,
-                      doc="share of the circle's cells that may be occupied (seed 000: rejected when under 90% free; "
-                          "0: any occupied cell rejects)"),
-    "obstacles": F("bool", True, doc="the map's obstacles block detections as its walls do (false: walls only, for a "
-                                     "map that leaves out furniture, which moves)"),
-})
+# seed 000 Sec. V-C's static-map filter (pipeline/map_filter.py declares its parameters)
+MAP_FILTER = schema_of(MapFilter)
 
-# the group stage (pipeline/groups: relations, detection, composition tracking; SPENCER's defaults, a test keeps
-# them equal to the class's)
-COHERENT_MOTION = Schema({
-    "model": F("str", "spencer",
-               doc="relation classifier: spencer (SPENCER's released linear SVM, groups_probabilistic_small.model), "
-                   "svm (ours: linear SVM on cubic monomials + Platt) or forest (ours: random forest), both trained "
-                   "on airport tracker output by `crowdsim experiment train-relations`, or the path of a model it "
-                   "wrote"),
-    "threshold": F("float", 0.5, min=0.0, max=1.0,
-                   doc="least relation strength that joins two tracks (SPENCER's tracked_groups.py: 0.5)"),
-    "linkage": F("str", "single", choices=("single", "complete", "average"),
-                 doc="single: groups are the connected components (SPENCER's); complete/average: each component "
-                     "clustered again so a queue of strangers does not chain (pipeline/groups/detection.py)"),
-    "smoothing": F("bool", False, doc="SPENCER's long-term relations: strengths rise and fall at limited rates"),
-    "max_distance": F("float", 3.0, min=0.0, doc="m, farther pairs get strength 0.1 (SPENCER's gate)"),
-    "max_speed_difference": F("float", 1.0, min=0.0, doc="m/s, pairs with speeds further apart get 0.1"),
-    "max_heading_difference": F("float", 0.7853981633974483, min=0.0,
-                                doc="rad, pairs with headings further apart get 0.1 (SPENCER's: pi/4)"),
-    "min_speed": F("float", 0.1, min=0.0, doc="m/s, a slower track's heading is taken as 0 (SPENCER's)"),
-    "memory": F("int", 300, min=1, doc="member sets the composition tracker remembers (SPENCER's: 300)"),
-})
-
-GROUP_STAGE_TYPES = {"coherent_motion": COHERENT_MOTION}
+# the group stage (pipeline/groups: relations, detection, composition tracking; SPENCER's defaults)
+GROUP_STAGE_TYPES = {name: schema_of(cls) for name, cls in GROUP_STAGES.items()}
 
 # the methods a class of one's own must have (pipeline/assemble.py's protocols; a test keeps them equal)
 DETECTOR = Typed(DETECTOR_TYPES, "laser_segments", "detector", ("detect", "reset"))

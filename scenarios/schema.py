@@ -114,7 +114,7 @@ class Typed:
 
 
 def schema_of(cls: type) -> Schema:
-    """The parameters a part declares on its class (pipeline/tracking/params.py ``param``: dataclass fields with
+    """The parameters a part declares on its class (pipeline/params.py ``param``: dataclass fields with
     their default, range and doc) as a Schema, with the class's ``CHECKS`` across them."""
     fields = {}
     for f in dataclasses.fields(cls):
@@ -130,21 +130,32 @@ def _kind(value: Any) -> str:
 
 
 def _declared(default: Any, p: dict) -> Field:
-    """The Field of one declared parameter (its kind that of its default)."""
+    """The Field of one declared parameter (its kind that of its default, or the one it names: optional when its
+    default is None)."""
+    if p["kind"] is not None:
+        return Field(p["kind"], default, min=p["min"], max=p["max"], exclusive_min=p["exclusive_min"],
+                     choices=p["choices"], doc=p["doc"], optional=default is None)
+    if isinstance(default, dict):
+        return Field(MapOf(_item(next(iter(default.values())), p["item"])), default, doc=p["doc"])
     if not isinstance(default, list):
         return Field(_kind(default), default, min=p["min"], max=p["max"], exclusive_min=p["exclusive_min"],
                      choices=p["choices"], doc=p["doc"])
     if p["parts"] is not None:
         item = Field(slot_typed(p["parts"]))
     else:
-        limits = p["item"] or {}
-        item = Field(_kind(default[0]), min=limits.get("min"), max=limits.get("max"),
-                     exclusive_min=limits.get("exclusive_min", False), choices=limits.get("choices"))
+        item = _item(default[0], p["item"])
     return Field(ListOf(item, min_items=p["min_items"]), default, doc=p["doc"])
 
 
+def _item(example: Any, limits: dict | None) -> Field:
+    """The Field of a list's or mapping's items: the kind of ``example``, the limits ``param``'s ``item`` gives."""
+    limits = limits or {}
+    return Field(_kind(example), min=limits.get("min"), max=limits.get("max"),
+                 exclusive_min=limits.get("exclusive_min", False), choices=limits.get("choices"))
+
+
 def slot_typed(slot: Any) -> Typed:
-    """The Typed of a slot for a part (pipeline/tracking/params.py ``Slot``): its built-in types' declared
+    """The Typed of a slot for a part (pipeline/params.py ``Slot``): its built-in types' declared
     parameters, its default type (the first type where the slot's default is none), its methods."""
     return Typed({name: schema_of(cls) for name, cls in slot.types.items()}, slot.default or next(iter(slot.types)),
                  slot.role, slot.methods)

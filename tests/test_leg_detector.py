@@ -6,6 +6,8 @@ import pytest
 from pipeline.detectors.legs import LegDetector, inscribed_angles, pair_legs
 from pipeline.detectors.segment_features import jump_segments
 from pipeline.types import LaserScan
+from scenarios.format import DETECTOR
+from scenarios.schema import ScenarioError, validate
 
 STEP = np.radians(0.5)  # seed 001's SICK: 180 degrees at 0.5 degree steps
 
@@ -84,7 +86,7 @@ def test_raw_blobs_keep_the_radius_band():
     # a leg (r 6 cm), a thin table leg (r 1 cm) and a wall piece 1.2 m long: only the leg's blob is in [0.03, 0.3]
     scan = cast([(2.0, 0.5, 0.06), (2.0, 1.5, 0.01)], segments=[((4.0, -2.0), (4.0, -0.8))],
                 step=np.radians(0.25))
-    blobs = LegDetector().blobs(scan)
+    blobs = LegDetector().raw_blobs(scan)
     assert blobs.modality == "laser_blobs" and len(blobs.position) == 1
     np.testing.assert_allclose(blobs.position[0, :2], [1.95, 0.5], atol=0.03)
 
@@ -92,12 +94,14 @@ def test_raw_blobs_keep_the_radius_band():
 def test_blobs_of_too_few_returns_are_left_out_and_come_as_a_named_batch():
     # a leg 2 m away (about 6 returns at 0.5 degrees) and one 12 m away (2 returns, as a grazing wall's pieces)
     scan = cast([(2.0, 0.0, 0.06), (12.0, 0.0, 0.06)], range_max=20.0, step=np.radians(0.5))
-    assert len(LegDetector().blobs(scan).position) == 1
+    assert len(LegDetector().raw_blobs(scan).position) == 1
     named = LegDetector(blobs=True).detect(scan)
     assert set(named) == {"legs", "blobs"} and named["legs"].modality == "laser2d"
     np.testing.assert_allclose(named["blobs"].position[:, 0], [1.95], atol=0.03)
 
 
-def test_bad_limits_are_named():
-    with pytest.raises(ValueError, match="min_width, max_width"):
-        LegDetector(min_width=0.3, max_width=0.2)
+def test_limits_out_of_order_are_one_error_naming_the_key():
+    for params, key in (({"min_width": 0.3, "max_width": 0.2}, "min_width"),
+                        ({"min_angle_deg": 170.0}, "min_angle_deg")):
+        with pytest.raises(ScenarioError, match=rf"<test>: d\.{key}: .*; expected at most max"):
+            validate({"type": "laser_legs", **params}, DETECTOR, "<test>", "d")

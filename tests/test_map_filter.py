@@ -1,8 +1,6 @@
 """The static-map filter (seed 000 Sec. V-C): the occupancy grid made from walls and obstacles, detections on it
 dropped, the tracking frame placed on the map through the localisation, and the filter in the loop."""
 
-import inspect
-
 import numpy as np
 import pytest
 from conftest import room
@@ -11,7 +9,6 @@ from crowdsim.loop import Simulation
 from pipeline.map_filter import MapFilter, occupancy_grid
 from pipeline.types import DetectedPersons
 from scenarios import scenario_from_dict
-from scenarios.format import MAP_FILTER
 from scenarios.geometry import closest_on_segments, wall_segments
 
 SQUARE = [[[0, 0], [4, 0], [4, 4], [0, 4], [0, 0]]]  # a 4 m room's walls
@@ -29,12 +26,6 @@ def detections(xy, frame="odom"):
     position = np.column_stack([np.asarray(xy, float).reshape(n, 2), np.zeros(n)])
     return DetectedPersons(1.0, frame, "laser2d", np.arange(n), position, np.tile(0.1 * np.eye(3), (n, 1, 1)),
                            np.ones(n))
-
-
-def test_the_defaults_are_the_formats():
-    signature = inspect.signature(MapFilter).parameters
-    own = {k: f.default for k, f in MAP_FILTER.fields.items() if k != "obstacles"}  # obstacles: build_pipeline's
-    assert own == {k: signature[k].default for k in own} and MAP_FILTER.fields["obstacles"].default is True
 
 
 def test_a_map_of_walls_only_keeps_detections_on_its_obstacles():

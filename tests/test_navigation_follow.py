@@ -36,7 +36,7 @@ class Recorder(StraightPlanner):
 
 
 def follower() -> PersonFollower:
-    return PersonFollower(Recorder(ROBOT))
+    return PersonFollower(Recorder(**ROBOT))
 
 
 def step(f, tracks, tag=None, pose=HERE):
@@ -89,7 +89,7 @@ def test_no_reading_of_anyone_far_from_every_track_is_followed():
     f = follower()
     step(f, persons([4], [[3.0, 1.5]]), tag_at([-3.0, -1.5]))
     assert f.target_track == -1
-    assert step(PersonFollower(Recorder(ROBOT)), persons([], np.zeros((0, 2)))) == (0.0, 0.0)
+    assert step(PersonFollower(Recorder(**ROBOT)), persons([], np.zeros((0, 2)))) == (0.0, 0.0)
 
 
 def test_sets_off_beyond_the_band_stops_at_its_centre_and_faces_the_user_within_it():
@@ -107,7 +107,7 @@ def test_sets_off_beyond_the_band_stops_at_its_centre_and_faces_the_user_within_
 
 def test_bad_band_refused():
     with pytest.raises(ValueError, match="band"):
-        PersonFollower(Recorder(ROBOT), band=(2.0, 1.0))
+        PersonFollower(Recorder(**ROBOT), band=(2.0, 1.0))
 
 
 def test_a_lost_user_is_looked_for_where_they_were_going():

@@ -14,9 +14,9 @@ from crowdsim.loop import Simulation
 from crowdsim.navigate import episode_metrics, with_planner
 from crowdsim.run import run
 from evaluation.navigation import navigation_metrics, read_nav_run
-from pipeline.navigation.planners import COMMON, PLANNERS, ROBOT_KEYS
+from pipeline.navigation.planners import NDPlanner, build_planner
 from scenarios import ScenarioError, load_scenario
-from scenarios.format import PLANNER_TYPES, TAG
+from scenarios.format import TAG
 from sensors.tag import TAG_DEFAULTS
 
 LASERS = [{"name": "front_laser", "mount": [0.25, 0, 0]}, {"name": "rear_laser", "mount": [-0.25, 0, math.pi]}]
@@ -107,16 +107,12 @@ def test_a_follow_target_on_an_unknown_route_or_too_fast_or_in_a_wall_is_refused
     refused(tmp_path, data, "robot.follow.target.start", "inside a wall")
 
 
-def test_driver_defaults_and_the_planner_and_tag_schemas_match_their_classes(tmp_path):
+def test_driver_defaults_and_the_tag_schema_matches_its_class(tmp_path):
     sc = load(tmp_path, room())
     robot = sc["robot"]
     assert robot["driver"] == "route" and robot["goals"] is None and robot["follow"] is None
     assert robot["goal_radius"] == 0.3 and robot["planner"]["type"] == "zone"
     assert sc["sensors"]["tag"] is None
-    assert set(PLANNER_TYPES) == set(PLANNERS)
-    for name, schema in PLANNER_TYPES.items():  # the robot's keys come from robot, the rest from the schema
-        defaults = {k: v for k, v in {**COMMON, **PLANNERS[name].DEFAULTS}.items() if k not in ROBOT_KEYS}
-        assert {k: f.default for k, f in schema.fields.items()} == defaults
     assert {k: f.default for k, f in TAG.fields.items()} == TAG_DEFAULTS
     follow = load(tmp_path, follow_room())
     assert follow["robot"]["follow"]["band"] == [1.0, 2.0] and follow["sensors"]["tag"] == TAG_DEFAULTS
@@ -292,3 +288,13 @@ def test_the_script_driver_turns_the_robot_in_place_in_the_loop(tmp_path):
     np.testing.assert_allclose(sim.robot.pose[:2], [1.5, 4.0], atol=1e-12)
     assert sim.robot.pose[2] == pytest.approx(0.22, abs=0.01)
     assert sim.robot.velocity.tolist() == [0.0, 0.0]
+
+
+def test_a_built_in_planner_gets_the_robots_radius_and_limits_besides_its_own_keys(tmp_path):
+    sc = load(tmp_path, goals_room(radius=0.3, max_speed=0.4, planner={"type": "nd", "sectors": 120}))
+    assert list(sc["robot"]["planner"]) == ["type", "goal_tolerance", "stop_margin", "security_distance", "sectors",
+                                            "wide_fraction"]  # the robot's keys are the robot's
+    planner = build_planner(sc["robot"]["planner"], sc["robot"])
+    assert type(planner) is NDPlanner and planner.nd.n == 120
+    assert (planner.radius, planner.max_speed, planner.max_angular_speed, planner.max_acceleration) == (0.3, 0.4,
+                                                                                                        1.0, 0.5)

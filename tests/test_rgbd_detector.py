@@ -10,9 +10,8 @@ from crowdsim.loop import Simulation
 from crowdsim.run import run
 from pipeline.detectors.hog import MODELS_DIR, ROBOT_MODEL_FILE, load_model
 from pipeline.detectors.rgbd import RgbdPeopleDetector
-from pipeline.tracking.rgbd_tracker import INIT_CONFIDENCE, RgbdTracker
+from pipeline.tracking.rgbd_tracker import INIT_CONFIDENCE
 from scenarios import load_scenario
-from scenarios.format import RGBD_TRACKER
 from crowdsim.scoring import CycleScorer
 
 
@@ -20,7 +19,6 @@ def test_the_track_start_threshold_is_the_shipped_models():
     with np.load(MODELS_DIR / ROBOT_MODEL_FILE) as data:
         info = json.loads(str(data["header"]))["info"]
     # the score 90% of the validation candidates on persons pass, above the detection threshold (97% pass)
-    assert INIT_CONFIDENCE == RGBD_TRACKER.fields["init_confidence"].default == RgbdTracker().init_confidence
     assert INIT_CONFIDENCE == pytest.approx(info["start_confidence"], abs=0.005)
     assert RgbdPeopleDetector().threshold == load_model(None, ROBOT_MODEL_FILE).threshold < INIT_CONFIDENCE
 

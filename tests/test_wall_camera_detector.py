@@ -58,5 +58,3 @@ def test_it_needs_colour_and_calibration():
     frame.pose = None
     with pytest.raises(ValueError, match="cam: the wall_people detector needs colour images"):
         WallCameraDetector(hog=False).detect(frame)
-    with pytest.raises(ValueError, match="foreground, hog"):
-        WallCameraDetector(foreground=False, hog=False)

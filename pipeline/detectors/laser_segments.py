@@ -7,20 +7,34 @@ a wall fragment is flat). Everything is computed on arrays over beams and segmen
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
+from pipeline.params import param
 from pipeline.types import DetectedPersons, LaserScan
 
 from .segment_features import jump_segments
 
+JUMP_DISTANCE = dict(default=0.4, doc="m, seed 000 Sec. 4.2: 0.4 m", min=0.0, exclusive_min=True)
+MIN_POINTS = dict(default=3, doc="seed 000 Sec. IV-C: far echoes of fewer than 3 points are unreliable", min=1)
+POSITION_VARIANCE = dict(default=0.1, doc="m^2, seed 000 Sec. IV-C: fixed R = diag(0.1, 0.1)", min=0.0,
+                         exclusive_min=True)
 
+
+@dataclass(eq=False)
 class SegmentDetector:
-    """The ``laser_segments`` detector. Defaults: seed 000 Sec. 4.2 and IV-C (scenarios/format.py says which)."""
+    """The ``laser_segments`` detector."""
 
-    def __init__(self, jump_distance: float = 0.4, min_points: int = 3, min_width: float = 0.1,
-                 max_width: float = 0.9, min_bulge: float = 0.03, position_variance: float = 0.1):
-        self.jump_distance, self.min_points, self.position_variance = jump_distance, min_points, position_variance
-        self.min_width, self.max_width, self.min_bulge = min_width, max_width, min_bulge
+    jump_distance: float = param(**JUMP_DISTANCE)
+    min_points: int = param(**MIN_POINTS)
+    min_width: float = param(0.1, "m, narrowest segment taken for a person", min=0.0)
+    max_width: float = param(0.9, "m, widest segment taken for a person", min=0.0)
+    min_bulge: float = param(0.03, "m, least mean depth of the interior points behind the chord (walls are flat)",
+                             min=0.0)
+    position_variance: float = param(**POSITION_VARIANCE)
+
+    def __post_init__(self):
         self.reset()
 
     def reset(self) -> None:

@@ -25,8 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
+from pipeline.params import param
 from pipeline.types import DetectedPersons, LaserScan
 
+from .laser_segments import JUMP_DISTANCE, MIN_POINTS, POSITION_VARIANCE
 from .segment_features import FEATURE_NAMES, Segments, jump_segments, segment_features
 
 MODELS_DIR = Path(__file__).parent / "models"
@@ -166,14 +168,22 @@ def push_back(centroid: np.ndarray, width: np.ndarray, offset: float, per_width:
     return centroid + ray * (offset + per_width * width)[:, None]
 
 
+@dataclass(eq=False)
 class LearnedSegmentDetector:
-    """The ``laser_learned`` detector. Defaults: scenarios/format.py says where each comes from."""
+    """The ``laser_learned`` detector; ``threshold`` left out becomes the model's when the detector is made."""
 
-    def __init__(self, model: str = "forest", threshold: float | None = None, jump_distance: float = 0.4,
-                 min_points: int = 3, position_variance: float = 0.1):
-        self.model = load_model(model)
-        self.threshold = self.model.threshold if threshold is None else float(threshold)
-        self.jump_distance, self.min_points, self.position_variance = jump_distance, min_points, position_variance
+    model: str = param("forest", "adaboost (Arras et al. 2007's boosted stumps, seed 000 Sec. II-A), forest (15 trees "
+                                 "of depth 10, seed 000 Sec. III-A: best there), or the path of a .json/.npz model "
+                                 "`crowdsim experiment train-detector --out` wrote")
+    threshold: float | None = param(None, "least person probability detected; left out: the model's own (peak F1 on "
+                                          "validation seeds)", kind="float", min=0.0, max=1.0)
+    jump_distance: float = param(**JUMP_DISTANCE)
+    min_points: int = param(**MIN_POINTS)
+    position_variance: float = param(**POSITION_VARIANCE)
+
+    def __post_init__(self):
+        self.segment_model = load_model(self.model)
+        self.threshold = self.segment_model.threshold if self.threshold is None else float(self.threshold)
         self.reset()
 
     def reset(self) -> None:
@@ -184,8 +194,8 @@ class LearnedSegmentDetector:
         """Every candidate segment's body centre [c, 2] (sensor frame) and probability of being a person [c]."""
         seg, keep, x = candidates(scan, self.jump_distance, self.min_points)
         width = x[:, FEATURE_NAMES.index("width")]
-        centre = push_back(seg.centroid[keep], width, self.model.offset, self.model.per_width)
-        return centre, self.model.classifier.predict_proba(x)
+        model = self.segment_model
+        return push_back(seg.centroid[keep], width, model.offset, model.per_width), model.classifier.predict_proba(x)
 
     def detect(self, scan: LaserScan) -> DetectedPersons:
         centre, p = self.score(scan)

@@ -19,39 +19,49 @@ Seed 001 gives none of the thresholds (it refers to Xavier et al.); ours are thi
 0.06 m scaled 0.65-1.05, ``sensors/body.py``: 8-13 cm wide, up to 0.44 m apart in a stride at 0.38 m), chosen by F1 at
 0.3 m over walkers in seed 001's room on training seeds (``crowdsim experiment seed001``'s notes give the figures).
 Two legs that touch, as a person standing still holds them, make one blob wider than a leg: no person.
-``blobs`` gives the raw-blob observations of seed 001's likelihood (Sec. 5.2.4): every blob whose half-width lies in
+``raw_blobs`` gives the raw-blob observations of seed 001's likelihood (Sec. 5.2.4): every blob whose half-width lies in
 [``blob_min_radius``, ``blob_max_radius``], which removes thin table legs and walls alike.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
+from pipeline.params import ordered, param
 from pipeline.types import DetectedPersons, LaserScan
 
 from .segment_features import Segments, jump_segments
 
 
+@dataclass(eq=False)
 class LegDetector:
-    """The ``laser_legs`` detector: persons from pairs of legs (and from single legs with ``single_legs``)."""
+    """The ``laser_legs`` detector: persons from pairs of legs (and from single legs with ``single_legs``). Seed 001
+    Sec. 4.1 gives the steps and Xavier et al. 2005's properties but no threshold: ours are chosen on this testbed's
+    legs (the module docstring says how)."""
 
-    def __init__(self, jump_distance: float = 0.08, min_points: int = 3, min_width: float = 0.05,
-                 max_width: float = 0.15, min_angle_deg: float = 90.0, max_angle_deg: float = 160.0,
-                 max_angle_sd_deg: float = 30.0, sharp_angle_deg: float = 60.0, pair_distance: float = 0.5,
-                 single_legs: bool = True, blobs: bool = False, blob_min_radius: float = 0.03,
-                 blob_max_radius: float = 0.3, position_variance: float = 0.05):
-        if not 0 < min_width <= max_width:
-            raise ValueError(f"min_width, max_width: expected 0 < min_width <= max_width, not {min_width}, {max_width}")
-        if not min_angle_deg <= max_angle_deg:
-            raise ValueError(f"min_angle_deg, max_angle_deg: expected min <= max, not {min_angle_deg}, {max_angle_deg}")
-        self.jump_distance, self.min_points = jump_distance, max(int(min_points), 3)
-        self.width = (min_width, max_width)
-        self.angle = np.radians([min_angle_deg, max_angle_deg])
-        self.max_angle_sd, self.sharp_angle = np.radians(max_angle_sd_deg), np.radians(sharp_angle_deg)
-        self.pair_distance, self.single_legs = pair_distance, single_legs
-        self.with_blobs = blobs
-        self.blob_radius = (blob_min_radius, blob_max_radius)
-        self.position_variance = position_variance
+    jump_distance: float = param(0.08, "m, consecutive returns farther apart start a new blob", min=0.0,
+                                 exclusive_min=True)
+    min_points: int = param(3, "returns of a leg (an inscribed angle needs an interior one)", min=3)
+    min_width: float = param(0.05, "m, narrowest leg (first to last return)", min=0.0, exclusive_min=True)
+    max_width: float = param(0.15, "m, widest leg", min=0.0, exclusive_min=True)
+    min_angle_deg: float = param(90.0, "deg, least mean inscribed angle (a half circle's)", min=0.0, max=180.0)
+    max_angle_deg: float = param(160.0, "deg, largest mean inscribed angle (flatter is a wall)", min=0.0, max=180.0)
+    max_angle_sd_deg: float = param(30.0, "deg, largest spread of the inscribed angles (a circle's: 0)", min=0.0)
+    sharp_angle_deg: float = param(60.0, "deg, a blob with a sharper inscribed angle is a sharp structure, no leg",
+                                   min=0.0, max=180.0)
+    pair_distance: float = param(0.5, "m, farthest two legs of one person", min=0.0)
+    single_legs: bool = param(True, "a leg without a partner is a person too (the other hidden behind it)")
+    blobs: bool = param(False, "also give the raw blobs: the named batches `legs` and `blobs` (seed 001's l_b, which "
+                               "the rjmcmc tracker's likelihood weighs)")
+    blob_min_radius: float = param(0.03, "m, least half-width of a raw blob (thinner: a table leg)", min=0.0)
+    blob_max_radius: float = param(0.3, "m, largest half-width of a raw blob (wider: a wall)", min=0.0)
+    position_variance: float = param(0.05, "m^2, of each person's position", min=0.0, exclusive_min=True)
+
+    CHECKS = (ordered("min_width", "max_width"), ordered("min_angle_deg", "max_angle_deg"))
+
+    def __post_init__(self):
         self.reset()
 
     def reset(self) -> None:
@@ -62,7 +72,7 @@ class LegDetector:
         """The centres [k, 2] (sensor frame) of the blobs that pass the leg filters."""
         return self._legs(jump_segments(scan, self.jump_distance))
 
-    def blobs(self, scan: LaserScan) -> DetectedPersons:
+    def raw_blobs(self, scan: LaserScan) -> DetectedPersons:
         """Seed 001's raw-blob observations: the centroids of the blobs of any shape with ``min_points`` returns or
         more whose half-width is within the radius band (no person is formed: a person may give one blob or two).
         Fewer returns are mostly pieces of a wall seen at a grazing angle, whose returns are farther apart than
@@ -74,23 +84,24 @@ class LegDetector:
         segmentation."""
         seg = jump_segments(scan, self.jump_distance)
         people = self._persons(scan, pair_legs(self._legs(seg), self.pair_distance, self.single_legs), "laser2d")
-        return {"legs": people, "blobs": self._blobs(scan, seg)} if self.with_blobs else people
+        return {"legs": people, "blobs": self._blobs(scan, seg)} if self.blobs else people
 
     def _legs(self, seg: Segments) -> np.ndarray:
         if not len(seg.start):
             return np.zeros((0, 2))
         width = _widths(seg)
         mean, sd, least = inscribed_angles(seg)
-        keep = ((seg.count >= self.min_points) & (width >= self.width[0]) & (width <= self.width[1])
-                & (mean >= self.angle[0]) & (mean <= self.angle[1]) & (sd <= self.max_angle_sd)
-                & (least >= self.sharp_angle))
+        low, high, spread, sharp = np.radians([self.min_angle_deg, self.max_angle_deg, self.max_angle_sd_deg,
+                                               self.sharp_angle_deg])
+        keep = ((seg.count >= self.min_points) & (width >= self.min_width) & (width <= self.max_width)
+                & (mean >= low) & (mean <= high) & (sd <= spread) & (least >= sharp))
         return arc_centres(seg.centroid[keep], width[keep])
 
     def _blobs(self, scan: LaserScan, seg: Segments) -> DetectedPersons:
         if not len(seg.start):
             return self._persons(scan, np.zeros((0, 2)), "laser_blobs")
         radius = _widths(seg) / 2
-        keep = (seg.count >= self.min_points) & (radius >= self.blob_radius[0]) & (radius <= self.blob_radius[1])
+        keep = (seg.count >= self.min_points) & (radius >= self.blob_min_radius) & (radius <= self.blob_max_radius)
         return self._persons(scan, seg.centroid[keep], "laser_blobs")
 
     def _persons(self, scan: LaserScan, xy: np.ndarray, modality: str) -> DetectedPersons:

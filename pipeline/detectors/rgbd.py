@@ -13,10 +13,13 @@ than the neck, and a camera below it sees a gap there that at 0.12 m cuts the he
 
 from __future__ import annotations
 
+import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.params import param
 from pipeline.tracking.online_boost import BINS, colour_histogram, rgb_to_hsv
 from pipeline.types import DepthFrame, DetectedPersons
 
@@ -42,26 +45,54 @@ def person_box(camera_matrix: np.ndarray, ground: np.ndarray, normal: np.ndarray
     return np.column_stack([middle - tall / 4, uv[:, 1, 1], middle + tall / 4, uv[:, 0, 1]])
 
 
+def _up_direction(p: dict):
+    if math.hypot(*p["up"]) < 1e-6:
+        return "up", f"{p['up']}; expected a direction (a non-zero vector), e.g. [0, -1, 0]: y is down in the image"
+
+
+@dataclass(eq=False)
 class RgbdPeopleDetector:
-    """The ``rgbd_people`` detector (module docstring). ``threshold`` None: the model's; ``hog`` False keeps every
-    candidate (confidence 0)."""
+    """The ``rgbd_people`` detector (module docstring). ``threshold`` None becomes the model's when the detector is
+    made; ``hog`` False keeps every candidate (confidence 0, threshold -inf). The paper gives the head distance and
+    voxels under 0.1 m (Table 7), the rest are its authors' released code's (PCL's ground-based people detection),
+    see head_clusters.py."""
 
-    def __init__(self, voxel: float = 0.06, cluster_tolerance: float = 0.15, head_distance: float = 0.3,
-                 up: list = OPTICAL_UP, max_tilt_deg: float = 30.0, sub_clustering: bool = True, hog: bool = True,
-                 model: str | None = None, threshold: float | None = None, colour_space: str = "rgb",
-                 position_variance: float = 0.036):
-        if colour_space not in COLOUR_SPACES:
-            raise ValueError(f"colour_space: {colour_space!r}; expected one of {', '.join(COLOUR_SPACES)}")
-        self.voxel = voxel
-        self.limits = ClusterLimits(voxel=voxel, cluster_tolerance=cluster_tolerance, head_distance=head_distance)
-        self.ground = GroundTracker(voxel, up, max_tilt_deg)
-        self.sub_clustering = sub_clustering
-        self.model = load_model(model, ROBOT_MODEL_FILE) if hog else None
-        self.threshold = (self.model.threshold if threshold is None else threshold) if hog else -np.inf
-        self.colour_space = colour_space
-        self.position_variance = position_variance
+    voxel: float = param(0.06, "m, the voxel grid's leaf (Table 7: below 0.1; PCL's 0.06)", min=0.0,
+                         exclusive_min=True, max=0.1)
+    cluster_tolerance: float = param(
+        0.15, "m, largest gap between neighbours of a Euclidean cluster (PCL: two voxels, 0.12 m; our bodies' torso "
+              "ends in a flat top 12 cm wider than the neck all round, and from below a camera sees a gap there: at "
+              "0.12 m a person 2-3 m away loses their head)", min=0.0, exclusive_min=True)
+    head_distance: float = param(0.3, "m, least distance between two people's heads when a cluster is split (Table 7)",
+                                 min=0.0, exclusive_min=True)
+    up: list[float] = param(OPTICAL_UP, "the floor's up direction in the camera's optical frame, roughly (y is down): "
+                                        "the first ground plane is searched near it", kind="point3")
+    max_tilt_deg: float = param(30.0, "deg, the first ground plane's largest tilt from `up`", min=0.0, max=90.0)
+    sub_clustering: bool = param(True, "split clusters at their heads (seed 003 Sec. 3.1.1; false: Table 2's \"No "
+                                       "sub.\" row)")
+    hog: bool = param(True, "score each candidate's box with the HOG classifier and keep those above threshold")
+    model: str | None = param(None, "the HOG model: left out, the shipped one (`crowdsim experiment train-hog --camera "
+                                    "robot`); or the path of the .npz it wrote with --out", kind="str")
+    threshold: float | None = param(None, "least HOG score of a detection; left out: the model's (the score 97% of "
+                                          "its validation people pass, as seed 003 keeps it low: Sec. 4.1.2)",
+                                    kind="float")
+    colour_space: str = param("rgb", "the detections' colour histograms (Tables 2-5: RGB; Table 7 recommends HSV); "
+                                     "the tracker's colour_space must be the same", choices=COLOUR_SPACES)
+    position_variance: float = param(0.036, "m^2 along the floor (the authors' later tracker: 30 (2 voxel)^2 / 12 at "
+                                            "0.06 m)", min=0.0, exclusive_min=True)
+
+    CHECKS = (_up_direction,)
+
+    def __post_init__(self):
+        self.limits = ClusterLimits(voxel=self.voxel, cluster_tolerance=self.cluster_tolerance,
+                                    head_distance=self.head_distance)
+        self.ground = GroundTracker(self.voxel, self.up, self.max_tilt_deg)
+        self.hog_model = load_model(self.model, ROBOT_MODEL_FILE) if self.hog else None
+        if not self.hog:
+            self.threshold = -np.inf
+        elif self.threshold is None:
+            self.threshold = self.hog_model.threshold
         self.reset()
-
         self.timing: dict[str, float] | None = None  # a dict here gathers the seconds each stage took
 
     def reset(self) -> None:
@@ -99,10 +130,10 @@ class RgbdPeopleDetector:
         if not len(boxes):
             return np.zeros(0)
         table = integral(orientation_votes(rgb))
-        return window_features(table, boxes) @ self.model.weight.astype(float) + self.model.bias
+        return window_features(table, boxes) @ self.hog_model.weight.astype(float) + self.hog_model.bias
 
     def detect(self, frame: DepthFrame) -> DetectedPersons:
-        if self.model is not None and (frame.rgb is None or frame.camera_matrix is None):
+        if self.hog_model is not None and (frame.rgb is None or frame.camera_matrix is None):
             raise ValueError(f"{frame.frame}: the rgbd_people detector's HOG stage needs colour images (rgb: true)")
         where, height, members = self.people(frame.points)
         if not len(where):
@@ -110,7 +141,7 @@ class RgbdPeopleDetector:
         normal = self.ground.plane[:3]
         confidence = np.zeros(len(where))
         t = time.perf_counter()
-        if self.model is not None:
+        if self.hog_model is not None:
             confidence = self.score(frame.rgb, person_box(frame.camera_matrix, where, normal, height))
         t = self._lap("hog", t)
         keep = confidence > self.threshold

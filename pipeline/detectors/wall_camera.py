@@ -12,10 +12,13 @@ diag(0.09, 0.09) m^2).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from pipeline.camera_geometry import image_to_floor
 from pipeline.frames import rotate_covariances, rotation, to_frame
+from pipeline.params import param
 from pipeline.types import DetectedPersons
 
 from .background import SigmaDelta, person_blobs
@@ -24,21 +27,37 @@ from .hog import load_model
 HOG_SCALES = [float(1.2 ** k) for k in range(8)]  # windows 128-458 px high: a person 2.2 to 8 m away at f 579
 
 
-class WallCameraDetector:
-    """The ``wall_people`` detector: ``foreground`` and ``hog`` switch the two kinds on and off."""
+def _foreground_or_hog(p: dict):
+    if not (p["foreground"] or p["hog"]):
+        return "hog", "false with foreground false too; expected at least one of foreground and hog on"
 
-    def __init__(self, foreground: bool = True, hog: bool = True, model: str | None = None,
-                 hog_scales: list = HOG_SCALES, bootstrap: int = 15, min_area: int = 150, min_aspect: float = 1.2,
-                 max_aspect: float = 5.0, robot_radius: float = 0.5, position_variance: float = 0.09):
-        if not (foreground or hog):
-            raise ValueError("foreground, hog: expected at least one of them on")
-        self.foreground, self.hog = foreground, hog
-        self.model = load_model(model) if hog else None
-        self.hog_scales = np.asarray(hog_scales, float)
-        self.background = SigmaDelta(bootstrap=bootstrap)
-        self.blob_limits = {"min_area": min_area, "min_aspect": min_aspect, "max_aspect": max_aspect}
-        self.robot_radius = robot_radius
-        self.position_variance = position_variance
+
+@dataclass(eq=False)
+class WallCameraDetector:
+    """The ``wall_people`` detector: ``foreground`` and ``hog`` switch the two kinds on and off. Seed 001 Sec.
+    4.2-4.3 names the methods (Sigma-Delta, morphology, an aspect ratio; HOG) but gives no parameter."""
+
+    foreground: bool = param(True, "Sigma-Delta foreground blobs (the batch `fseg`)")
+    hog: bool = param(True, "HOG person windows (the batch `hog`)")
+    model: str | None = param(None, "the HOG model: left out, the shipped one (`crowdsim experiment train-hog`); or "
+                                    "the path of the .npz it wrote with --out", kind="str")
+    hog_scales: list[float] = param(HOG_SCALES, "window scales searched (1: 64 x 128 pixels); the default covers a "
+                                                "person 2.2-8 m from a 640 x 480 camera at 45 degrees",
+                                    item=dict(min=0.1), min_items=1)
+    bootstrap: int = param(15, "frames whose median starts the background model (no detection before)", min=1)
+    min_area: int = param(150, "pixels, least foreground blob", min=1)
+    min_aspect: float = param(1.2, "least height / width of a foreground blob", min=0.0)
+    max_aspect: float = param(5.0, "largest height / width of a foreground blob", min=0.0)
+    robot_radius: float = param(0.5, "m, a detection whose floor point is this near the robot is the robot, masked "
+                                     "out (Rackham's 0.26 m and a margin for the foot point's error)", min=0.0)
+    position_variance: float = param(0.09, "m^2 along the floor (seed 001 Table 1: Sigma = diag(0.09, 0.09))",
+                                     min=0.0, exclusive_min=True)
+
+    CHECKS = (_foreground_or_hog,)
+
+    def __post_init__(self):
+        self.hog_model = load_model(self.model) if self.hog else None
+        self.background = SigmaDelta(bootstrap=self.bootstrap)
         self.reset()
 
     def reset(self) -> None:
@@ -51,10 +70,11 @@ class WallCameraDetector:
                              "calibration (camera_matrix, pose)")
         out = {}
         if self.foreground:
-            boxes = person_blobs(self.background.update(frame.rgb), **self.blob_limits)
+            boxes = person_blobs(self.background.update(frame.rgb), min_area=self.min_area, min_aspect=self.min_aspect,
+                                 max_aspect=self.max_aspect)
             out["fseg"] = self._on_floor(frame, boxes, "fseg", np.ones(len(boxes)))
         if self.hog:
-            boxes, scores = self.model.detect(frame.rgb, self.hog_scales)
+            boxes, scores = self.hog_model.detect(frame.rgb, np.asarray(self.hog_scales, float))
             out["hog"] = self._on_floor(frame, boxes, "hog", scores)
         return out
 

@@ -98,10 +98,10 @@ class PersonFollower:
         distance = float(np.hypot(offset[0], offset[1]))
         near, far = self.band
         centre = (near + far) / 2
-        p = self.planner.p
-        tolerance = p.get("goal_tolerance", 0.0)
+        tolerance = getattr(self.planner, "goal_tolerance", 0.0)
         speed = float(np.hypot(*self._velocity))
-        aim = float(np.clip(centre - speed ** 2 / (2 * p.get("max_acceleration", np.inf)) - tolerance, near, centre))
+        aim = float(np.clip(centre - speed ** 2 / (2 * getattr(self.planner, "max_acceleration", np.inf)) - tolerance,
+                            near, centre))
         away = speed >= WALKING and distance > 0 and float(offset @ self._velocity) > 0
         if distance > far or (distance > centre and away):
             self._driving = True
@@ -109,7 +109,7 @@ class PersonFollower:
             self._driving = False
         if not self._driving:
             bearing = float(wrap_angle(np.arctan2(offset[1], offset[0]) - pose[2]))
-            return drive(0.0, bearing, p["max_angular_speed"])
+            return drive(0.0, bearing, self.planner.max_angular_speed)
         goal = target - aim * offset / distance
         return self.planner.command(stamp, pose, velocity, obstacles, tracks.select(~mine), goal)
 

@@ -1,10 +1,11 @@
 """Local planners behind one interface, so that a navigation policy can be swapped and compared in the loop:
-``Planner(params).command(stamp, pose, velocity, obstacles, tracks, goal) -> (v, omega)``.
+``Planner(**params).command(stamp, pose, velocity, obstacles, tracks, goal) -> (v, omega)``.
 
 Every planner sees what a real robot has, all in ``odom``: its odometry pose, the (v, omega) it executed last, the
-laser returns as points, the people tracks, and the goal. Each is made from a dict of parameters: the robot's
-``radius`` (m), ``max_speed`` (m/s) and ``max_angular_speed`` (rad/s), required, and optional keys with defaults
-(``COMMON`` and the planner's ``DEFAULTS``, each with its source). ``PLANNERS`` names them:
+laser returns as points, the people tracks, and the goal. Each is made from keyword parameters: the robot's
+``radius`` (m), ``max_speed`` (m/s) and ``max_angular_speed`` (rad/s), required, its ``max_acceleration`` (m/s^2),
+and the planner's own, which it declares on its class with their defaults, ranges and sources (pipeline/params.py
+``param``; the scenario's ``robot.planner`` section holds these). ``PLANNERS`` names them:
 
 * ``zone``: Nearness Diagram over the laser points and the security zones of the tracked persons (seed 001 Sec. 7);
 * ``nd``: Nearness Diagram over the laser points alone (persons are obstacles like any other);
@@ -21,37 +22,34 @@ law (speed in proportion to the nearest obstacle's distance within ds) allows fo
 
 from __future__ import annotations
 
-import numbers
+from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.assemble import check_outputs, make_user_part
 from pipeline.frames import inverse, transform_points, unrotate
+from pipeline.params import param
 from pipeline.types import TrackedPersons
 
 from .nd import NDResult, NearnessDiagram, drive, nearest_per_sector
 from .zones import SecurityZones
 
-REQUIRED = ("radius", "max_speed", "max_angular_speed")
-COMMON = {
-    # m/s^2, the braking on the way to the goal: the robot's default (scenarios/format.py, robot.max_acceleration)
-    "max_acceleration": 0.5,
-    # m: well inside the follower's band (1-2 m behind the person), so that the follower, not the planner,
-    # decides where the robot stops; an assumption
-    "goal_tolerance": 0.1,
-    # m: the gap the braking for a return in the robot's path leaves; an assumption (a few laser range errors)
-    "stop_margin": 0.05,
-}
 
-
+@dataclass(kw_only=True, eq=False)
 class Planner:
     """A local planner: ``command`` gives the (v, omega) for the next tick, ``reset`` starts it over."""
 
-    name = "planner"
-    DEFAULTS: dict = {}
-
-    def __init__(self, params: dict):
-        self.p = _checked(self.name, params, {**COMMON, **self.DEFAULTS})
+    # the robot's, given by build_planner from the scenario's robot section (not keys of robot.planner)
+    radius: float  # m
+    max_speed: float  # m/s
+    max_angular_speed: float  # rad/s
+    max_acceleration: float = 0.5  # m/s^2, the braking on the way to the goal: the robot's default
+    # well inside the follower's band (1-2 m behind the person), so that the follower, not the planner, decides where
+    # the robot stops
+    goal_tolerance: float = param(0.1, "m, the planner stops this near its goal (well inside the follower's band; an "
+                                       "assumption)", min=0.0)
+    # a few laser range errors
+    stop_margin: float = param(0.05, "m, every planner brakes to stop this short of the nearest laser return in its "
+                                     "path (an assumption)", min=0.0)
 
     def reset(self) -> None:
         """Start over (the planners here keep nothing between calls)."""
@@ -65,39 +63,43 @@ class Planner:
         pts = np.asarray(obstacles, float).reshape(-1, 2)
         pts = transform_points(base, pts[np.isfinite(pts).all(axis=1)])
         g = transform_points(base, np.asarray(goal, float).reshape(1, 2))[0]
-        remaining = float(np.hypot(g[0], g[1])) - self.p["goal_tolerance"]
+        remaining = float(np.hypot(g[0], g[1])) - self.goal_tolerance
         if remaining <= 0:
             return 0.0, 0.0
         persons = transform_points(base, tracks.position)
         person_velocity = unrotate(pose, tracks.velocity)  # into base_link
         v, omega = self._command(pts, persons, person_velocity, g)
-        p = self.p
-        ahead = (pts[:, 0] > 0) & (np.abs(pts[:, 1]) < p["radius"])
+        ahead = (pts[:, 0] > 0) & (np.abs(pts[:, 1]) < self.radius)
         room = remaining
         if ahead.any():
-            room = min(room, float(pts[ahead, 0].min()) - p["radius"] - p["stop_margin"])
-        return min(float(v), float(np.sqrt(2.0 * p["max_acceleration"] * max(room, 0.0)))), float(omega)
+            room = min(room, float(pts[ahead, 0].min()) - self.radius - self.stop_margin)
+        return min(float(v), float(np.sqrt(2.0 * self.max_acceleration * max(room, 0.0)))), float(omega)
 
     def _command(self, points, persons, person_velocity, goal) -> tuple[float, float]:
         """The planner's own law, everything in base_link."""
         raise NotImplementedError
 
 
+def _sectors(p: dict):
+    if p["sectors"] % 4:
+        return "sectors", f"{p['sectors']}; expected a multiple of 4 (the nearness diagram's quadrants)"
+
+
+@dataclass(kw_only=True, eq=False)
 class NDPlanner(Planner):
     """Nearness Diagram (pipeline/navigation/nd.py) over the laser returns; ``last`` keeps its latest result."""
 
-    name = "nd"
-    DEFAULTS = {
-        "security_distance": 0.5,  # m, ds: Player's nd driver default (avoid_dist), see nd.py
-        "sectors": 180,  # the authors' SECTORES (nd.py)
-        "wide_fraction": 0.25,  # a region wider than a quarter of the sectors is wide (nd.py)
-    }
+    security_distance: float = param(0.5, "m, ds: obstacles nearer the robot's edge are dangerous (Player's nd "
+                                          "driver, avoid_dist)", min=0.0, exclusive_min=True)
+    sectors: int = param(180, "sectors of the nearness diagram, a multiple of 4 (Minguez's SECTORES)", min=8)
+    wide_fraction: float = param(0.25, "a region wider than this share of the sectors is wide (Minguez & Montano "
+                                       "2004)", min=0.0, exclusive_min=True, max=1.0)
 
-    def __init__(self, params: dict):
-        super().__init__(params)
-        p = self.p
-        self.nd = NearnessDiagram(p["radius"], p["max_speed"], p["max_angular_speed"], p["security_distance"],
-                                  int(p["sectors"]), p["wide_fraction"])
+    CHECKS = (_sectors,)
+
+    def __post_init__(self) -> None:
+        self.nd = NearnessDiagram(self.radius, self.max_speed, self.max_angular_speed, self.security_distance,
+                                  self.sectors, self.wide_fraction)
         self.last: NDResult | None = None
         self._turning = 0.0  # the way the robot turns on the spot (+1 left, -1 right, 0 it does not)
 
@@ -124,6 +126,7 @@ class NDPlanner(Planner):
         return points, None
 
 
+@dataclass(kw_only=True, eq=False)
 class ZonePlanner(NDPlanner):
     """ND over the laser returns plus each tracked person's security zone, seen as a scan of virtual returns from
     ``zone_rays`` rays around the robot (seed 001 Sec. 7: ND with persons as "obstacles with special zone needs").
@@ -150,32 +153,35 @@ class ZonePlanner(NDPlanner):
     reach ahead, and ND itself (nd.py) counts only obstacles ahead of the robot's axle as dangerous.
     """
 
-    name = "zone"
-    DEFAULTS = {
-        **NDPlanner.DEFAULTS,
-        "zone_radius": 0.5,  # m, r (seed 001 Fig. 11)
-        "zone_reach": 1.5,  # m, R (seed 001 Fig. 11)
-        "zone_opening_deg": 30.0,  # deg, omega, the sector's full opening (seed 001 Fig. 11; zones.py says why)
-        "standing_speed": 0.25,  # m/s, slower persons get the disc alone (zones.py says why)
-        "zone_rays": 360,  # two rays per ND sector, so each sector sees the zone's nearest boundary within 1 deg
-        # m, ND's security distance for the zones' virtual returns: a zone is a margin kept round a person already
-        # (seed 001), so ND's own 0.5 m (for physical obstacles) on top of it doubles the margin; 0.2 m, the gap at
-        # which people pass the robot in the crowd model (its robot_range), keeps the robot moving among passers-by
-        # (passers_by, seeds 1-20, 2026-11-30: 20 reach the goal with 0.2 m, 17 with 0.3 m, 18 with 0.5 m)
-        "zone_security_distance": 0.2,
-        # s, yield to a passer-by crossing the robot's course ahead within this time (0: never): 2 s, about the
-        # reach of seed 001's sector (1.1 s at 1.34 m/s) and a second more; measured on passers_by (seeds 1-20,
-        # 2026-11-30): goal reached in 20 runs with 0.45 crossings in front of a passer-by a run with 2 s; 18 and
-        # 0.30 with 3 s; 20 and 0.65 without
-        "yield_time": 2.0,
-    }
+    zone_radius: float = param(0.5, "m, r: the disc round each tracked person (seed 001 Fig. 11)", min=0.0,
+                               exclusive_min=True)
+    zone_reach: float = param(1.5, "m, R: the sector ahead of a walking person (seed 001 Fig. 11)", min=0.0,
+                              exclusive_min=True)
+    zone_opening_deg: float = param(30.0, "deg, omega: the sector's full opening (seed 001 Fig. 11; "
+                                          "pipeline/navigation/zones.py says why full)", min=0.0, exclusive_min=True,
+                                    max=180.0)
+    standing_speed: float = param(0.25, "m/s, slower tracks get the disc alone (above the tracker's speed for a "
+                                        "person standing still; pipeline/navigation/zones.py)", min=0.0)
+    # two rays per ND sector, so each sector sees the zone's nearest boundary within 1 deg
+    zone_rays: int = param(360, "rays that read the zones as a scan (two per ND sector)", min=8)
+    # a zone is a margin kept round a person already (seed 001), so ND's own 0.5 m (for physical obstacles) on top of
+    # it doubles the margin; 0.2 m, the gap at which people pass the robot in the crowd model (its robot_range), keeps
+    # the robot moving among passers-by (passers_by, seeds 1-20, 2026-11-30: 20 reach the goal with 0.2 m, 17 with
+    # 0.3 m, 18 with 0.5 m)
+    zone_security_distance: float = param(0.2, "m, ND's security distance for the zones (a zone is a margin already; "
+                                                "pipeline/navigation/planners.py says why 0.2)", min=0.0,
+                                          exclusive_min=True)
+    # 2 s, about the reach of seed 001's sector (1.1 s at 1.34 m/s) and a second more; measured on passers_by (seeds
+    # 1-20, 2026-11-30): goal reached in 20 runs with 0.45 crossings in front of a passer-by a run with 2 s; 18 and
+    # 0.30 with 3 s; 20 and 0.65 without
+    yield_time: float = param(2.0, "s, give way to a passer-by crossing the robot's course ahead within this time "
+                                   "(0: never; an addition to seed 001, pipeline/navigation/planners.py)", min=0.0)
 
-    def __init__(self, params: dict):
-        super().__init__(params)
-        p = self.p
-        self.zones = SecurityZones(p["zone_radius"], p["zone_reach"], np.radians(p["zone_opening_deg"]),
-                                   p["standing_speed"])
-        n = int(p["zone_rays"])
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        self.zones = SecurityZones(self.zone_radius, self.zone_reach, np.radians(self.zone_opening_deg),
+                                   self.standing_speed)
+        n = self.zone_rays
         self.angles = -np.pi + (np.arange(n) + 0.5) * (2 * np.pi / n)
         self.directions = np.stack([np.cos(self.angles), np.sin(self.angles)], axis=1)
 
@@ -188,8 +194,8 @@ class ZonePlanner(NDPlanner):
         walking = walking & ~in_zone
         ranges = self.zones.zone_ranges(robot[0], self.angles, persons[keep], heading[keep], walking[keep])
         hit = np.isfinite(ranges)
-        security = np.r_[np.full(len(points), self.p["security_distance"]),
-                         np.full(int(hit.sum()), self.p["zone_security_distance"])]
+        security = np.r_[np.full(len(points), self.security_distance),
+                         np.full(int(hit.sum()), self.zone_security_distance)]
         return np.concatenate([points, ranges[hit, None] * self.directions[hit]]), security
 
     def _command(self, points, persons, person_velocity, goal):
@@ -202,48 +208,47 @@ class ZonePlanner(NDPlanner):
         one to yield to). A person at (x, y) walking at (vx, vy) crosses the line y = 0 at t = -y / vy, at
         x_c = x + t vx; their disc, grown by the robot's radius, w = r + radius, covers the crossing from
         t - w / |vy| until t + w / |vy|, and the robot's front must not reach x_c - w before then."""
-        p = self.p
-        if p["yield_time"] <= 0 or not len(persons):
+        if self.yield_time <= 0 or not len(persons):
             return np.inf
         vx, vy = person_velocity[:, 0], person_velocity[:, 1]
         crossing = (np.hypot(vx, vy) >= self.zones.standing_speed) & (np.abs(vy) > 1e-6)
         t = -persons[:, 1] / np.where(crossing, vy, 1.0)
-        w = self.zones.r + p["radius"]
+        w = self.zones.r + self.radius
         half = w / np.maximum(np.abs(vy), 1e-6)
         clear = t + half
         at = persons[:, 0] + t * vx
         # due within yield_time, or a slow walker's zone (its sector's reach R plus the robot's radius) at the
         # course already
-        reach = self.zones.R + p["radius"]
-        due = crossing & ((t <= p["yield_time"]) | (t * np.hypot(vx, vy) <= reach)) & (clear > 0) & (at > -w)
+        reach = self.zones.R + self.radius
+        due = crossing & ((t <= self.yield_time) | (t * np.hypot(vx, vy) <= reach)) & (clear > 0) & (at > -w)
         if not due.any():
             return np.inf
         return float((np.maximum(at[due] - w, 0.0) / clear[due]).min())
 
 
+@dataclass(kw_only=True, eq=False)
 class StraightPlanner(Planner):
     """Turn to the goal and drive; stop while a laser return lies in the robot's path nearer than
     ``safety_distance`` (crowdsim's route driver and its safety stop, as a planner)."""
 
-    name = "straight"
-    DEFAULTS = {
-        "safety_distance": 0.6,  # m, the route driver's (scenarios/format.py, robot.safety_distance)
-        "heading_gain": 2.0,  # 1/s, omega = gain x heading error (the route driver, crowdsim/robot.py)
-        "drive_cone_deg": 60.0,  # deg, drive only with the goal within this of the heading (the route driver)
-        "corridor_margin": 0.1,  # m, the path is the robot's width plus this each side (the route driver's check)
-    }
+    safety_distance: float = param(0.6, "m, stop for a laser return this near ahead (robot.safety_distance)",
+                                   min=0.0)
+    heading_gain: float = param(2.0, "1/s, omega = gain x heading error (the route driver's)", min=0.0)
+    drive_cone_deg: float = param(60.0, "deg, drive only with the goal this near the heading (the route driver's)",
+                                  min=0.0, max=180.0)
+    corridor_margin: float = param(0.1, "m, the path checked is the robot's width plus this each side", min=0.0)
 
     def _command(self, points, persons, person_velocity, goal):
-        p = self.p
         err = float(np.arctan2(goal[1], goal[0]))
-        omega = float(np.clip(p["heading_gain"] * err, -p["max_angular_speed"], p["max_angular_speed"]))
-        v = p["max_speed"] * np.cos(err) if abs(err) < np.radians(p["drive_cone_deg"]) else 0.0
-        ahead = (points[:, 0] > 0) & (np.abs(points[:, 1]) < p["radius"] + p["corridor_margin"])
-        if ahead.any() and points[ahead, 0].min() - p["radius"] < p["safety_distance"]:
+        omega = float(np.clip(self.heading_gain * err, -self.max_angular_speed, self.max_angular_speed))
+        v = self.max_speed * np.cos(err) if abs(err) < np.radians(self.drive_cone_deg) else 0.0
+        ahead = (points[:, 0] > 0) & (np.abs(points[:, 1]) < self.radius + self.corridor_margin)
+        if ahead.any() and points[ahead, 0].min() - self.radius < self.safety_distance:
             v = 0.0
         return v, omega
 
 
+@dataclass(kw_only=True, eq=False)
 class SocialForcePlanner(Planner):
     """The robot as a social-force agent (Helbing & Molnar 1995, as robot navigation: Ferrer, Garrell & Sanfeliu,
     IROS 2013): a goal attraction (v0 e - v)/tau, repulsions -grad V0 exp(-b/sigma) from each tracked person and
@@ -258,42 +263,39 @@ class SocialForcePlanner(Planner):
     person's legs, already counted as the person.
     """
 
-    name = "social_force"
-    DEFAULTS = {
-        "relaxation_time": 0.5,  # s, tau (HM 1995)
-        "person_strength": 2.1,  # m^2/s^2, V0 of the pedestrian potential (HM 1995)
-        "person_range": 0.3,  # m, sigma (HM 1995)
-        "obstacle_strength": 10.0,  # m^2/s^2, U0 of the wall potential (HM 1995)
-        "obstacle_range": 0.2,  # m, R of the wall potential (HM 1995)
-        "fov_deg": 200.0,  # deg, 2 phi, the field of view (HM 1995)
-        "out_of_view_weight": 0.5,  # c, weight of what is out of view (HM 1995)
-        "obstacle_sectors": 36,  # 10 deg each; an assumption: the walls' extent, not the beams', counts
-        # m, a person's laser returns lie this near the track: body radius 0.25 m (scenarios/format.py, adult)
-        # plus ~0.15 m of track position error; an assumption
-        "person_radius": 0.4,
-    }
+    relaxation_time: float = param(0.5, "s, tau (Helbing & Molnar 1995)", min=0.0)
+    person_strength: float = param(2.1, "m^2/s^2, V0 of the pedestrian potential (HM 1995)", min=0.0)
+    person_range: float = param(0.3, "m, sigma of that potential (HM 1995)", min=0.0, exclusive_min=True)
+    obstacle_strength: float = param(10.0, "m^2/s^2, U0 of the wall potential (HM 1995)", min=0.0)
+    obstacle_range: float = param(0.2, "m, R of the wall potential (HM 1995)", min=0.0, exclusive_min=True)
+    fov_deg: float = param(200.0, "deg, 2 phi, the field of view (HM 1995)", min=0.0, max=360.0)
+    out_of_view_weight: float = param(0.5, "c, weight of what is out of view (HM 1995)", min=0.0, max=1.0)
+    # 10 deg each: the walls' extent, not the beams', counts
+    obstacle_sectors: int = param(36, "laser returns count once per sector (an assumption)", min=1)
+    # body radius 0.25 m (scenarios/format.py, adult) plus ~0.15 m of track position error
+    person_radius: float = param(0.4, "m, laser returns this near a track are that person's (body 0.25 m plus track "
+                                      "error; an assumption)", min=0.0)
 
     def _command(self, points, persons, person_velocity, goal):
-        p = self.p
         e = goal / np.hypot(goal[0], goal[1])
         dist = np.hypot(persons[:, 0], persons[:, 1])
         away = -persons / np.maximum(dist, 1e-9)[:, None]
-        seen = (persons @ e) >= np.cos(np.radians(p["fov_deg"]) / 2) * dist
-        weight = np.where(seen, 1.0, p["out_of_view_weight"])
-        push = weight * p["person_strength"] / p["person_range"] * np.exp(
-            -np.maximum(dist - p["radius"], 0.0) / p["person_range"])
+        seen = (persons @ e) >= np.cos(np.radians(self.fov_deg) / 2) * dist
+        weight = np.where(seen, 1.0, self.out_of_view_weight)
+        push = weight * self.person_strength / self.person_range * np.exp(
+            -np.maximum(dist - self.radius, 0.0) / self.person_range)
         force = push @ away
         if len(persons):  # squared point-person distances [m, k] as |a|^2 + |b|^2 - 2 a.b: one matrix product
             d2 = (points ** 2).sum(axis=1)[:, None] + (persons ** 2).sum(axis=1)[None, :] - 2.0 * points @ persons.T
-            points = points[d2.min(axis=1) > p["person_radius"] ** 2]
-        d, nearest = nearest_per_sector(points, int(p["obstacle_sectors"]))
+            points = points[d2.min(axis=1) > self.person_radius ** 2]
+        d, nearest = nearest_per_sector(points, self.obstacle_sectors)
         seen = np.isfinite(d)
-        push = p["obstacle_strength"] / p["obstacle_range"] * np.exp(
-            -np.maximum(d[seen] - p["radius"], 0.0) / p["obstacle_range"])
+        push = self.obstacle_strength / self.obstacle_range * np.exp(
+            -np.maximum(d[seen] - self.radius, 0.0) / self.obstacle_range)
         force = force - push @ (nearest[seen] / d[seen, None])
-        want = p["max_speed"] * e + p["relaxation_time"] * force
-        speed = min(float(np.hypot(want[0], want[1])), p["max_speed"])
-        return drive(speed, float(np.arctan2(want[1], want[0])), p["max_angular_speed"])
+        want = self.max_speed * e + self.relaxation_time * force
+        speed = min(float(np.hypot(want[0], want[1])), self.max_speed)
+        return drive(speed, float(np.arctan2(want[1], want[0])), self.max_angular_speed)
 
 
 PLANNERS: dict[str, type[Planner]] = {
@@ -304,24 +306,6 @@ PLANNERS: dict[str, type[Planner]] = {
 }
 
 
-def _checked(name: str, params: dict, defaults: dict) -> dict:
-    """The parameters with defaults filled in; ValueError naming the planner and key for an unknown or missing
-    key or a value that is not a finite number >= 0 (the radius > 0)."""
-    unknown = sorted(set(params) - set(defaults) - set(REQUIRED))
-    if unknown:
-        raise ValueError(f"planner {name}: unknown parameter(s) {unknown}; expected {sorted([*REQUIRED, *defaults])}")
-    missing = [key for key in REQUIRED if key not in params]
-    if missing:
-        raise ValueError(f"planner {name}: missing parameter(s) {missing}")
-    merged = {**defaults, **params}
-    for key, value in merged.items():
-        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value < 0:
-            raise ValueError(f"planner {name}: {key} must be a finite number >= 0, got {value!r}")
-    if merged["radius"] <= 0:
-        raise ValueError(f"planner {name}: radius must be > 0 m, got {merged['radius']!r}")
-    return merged
-
-
 ROBOT_KEYS = ("radius", "max_speed", "max_angular_speed", "max_acceleration")
 
 
@@ -330,8 +314,11 @@ def build_planner(spec: dict, robot: dict, source: str = "<scenario>") -> Planne
     robot's radius, speed limits and acceleration (``robot``: the scenario's ``robot`` section) besides its keys, or
     a class of one's own, made as ``Class(**keys)`` like the pipeline's parts (pipeline/assemble.py: what its
     constructor raises, and a command that is no (v, omega), are one error naming ``source``'s key)."""
+    # here, not at the top: assemble imports the scenario format, which imports this module for the planners' keys
+    from pipeline.assemble import check_outputs, make_user_part
+
     params = {key: value for key, value in spec.items() if key != "type"}
     if spec["type"] in PLANNERS:
-        return PLANNERS[spec["type"]]({**{key: robot[key] for key in ROBOT_KEYS}, **params})
+        return PLANNERS[spec["type"]](**{key: robot[key] for key in ROBOT_KEYS}, **params)
     return check_outputs(make_user_part(spec["type"], params, source, "robot.planner"), "planner", source,
                          "robot.planner")

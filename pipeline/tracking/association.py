@@ -30,7 +30,7 @@ from typing import ClassVar
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from .params import param
+from ..params import param
 
 __all__ = ["ASSOCIATIONS", "GreedyNN", "GlobalNN", "MultiNN", "WINDOWS_FROM", "checked_detections", "mahalanobis",
            "gated_mahalanobis", "greedy_assign", "global_assign", "multi_assign"]

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .params import param
+from ..params import param
 
 __all__ = ["DELETIONS", "FixedDeletion", "YoungMatureDeletion"]
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .motion import INITIAL_VARIANCE, MODELS, layout_with
-from .params import Slot, made, param
+from ..params import Slot, made, param
 
 __all__ = ["IMM", "MOTIONS", "MOTION", "as_filter", "kalman_update", "kalman_update_soa"]
 

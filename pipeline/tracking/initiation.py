@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .params import param
+from ..params import param
 
 __all__ = ["INITIATIONS", "CountInitiation", "BaseInitiation", "ExtendedInitiation"]
 

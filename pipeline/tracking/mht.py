@@ -54,6 +54,7 @@ from scipy.optimize import linear_sum_assignment
 
 from pipeline.types import DetectedPersons, TrackedPersons
 
+from ..params import param
 from .association import checked_detections, mahalanobis
 from .imm import kalman_update
 from .motion import ConstantVelocity
@@ -63,72 +64,72 @@ __all__ = ["MHTParams", "MultiHypothesisTracker", "KBestAssignments", "assignmen
 _LOG_2PI = float(np.log(2.0 * np.pi))
 
 
+def _outcomes_sum_to_one(p: dict):
+    total = p["p_det"] + p["p_occ"] + p["p_del"]
+    if abs(total - 1.0) > 1e-9:
+        return "p_del", f"p_det + p_occ + p_del = {total:g}; expected 1 (seed 000 Sec. IV-C)"
+
+
 @dataclass
 class MHTParams:
-    """Parameters of the multi-hypothesis tracker (units: metres, seconds, tracking cycles)."""
+    """Parameters of the multi-hypothesis tracker (units: metres, seconds, tracking cycles), the scenario's keys of
+    ``tracker: {type: mht}``."""
 
-    process_noise: float = 0.267
-    """q_L (m^2/s^3) of the CV model: the NNT's (seed 000 Sec. IV-C: the MHT's EKF parameters are the NNT's)."""
+    process_noise: float = param(0.267, "m^2/s^3, q_L of the CV model: the NNT's (seed 000 Sec. IV-C)", min=0.0,
+                                 exclusive_min=True)
+    """The MHT's EKF parameters are the NNT's (seed 000 Sec. IV-C)."""
 
-    gate_chi2: float = 13.82
-    """Mahalanobis gate on the 2D innovation, the NNT's (chi-square 0.999 for 2 dof); seed 000 gives no MHT gate.
-    Pairs outside it are never associated; at the gate a detection is about as likely (p_det N) as a miss plus a new
-    track (p_occ lambda_new) for the seed's R = 0.1 I, so the gate cuts only what the model would rarely choose."""
+    gate_chi2: float = param(13.82, "Mahalanobis gate (chi2 0.999 for 2 dof)", min=0.0, exclusive_min=True)
+    """On the 2D innovation, the NNT's; seed 000 gives no MHT gate. Pairs outside it are never associated; at the
+    gate a detection is about as likely (p_det N) as a miss plus a new track (p_occ lambda_new) for the seed's R = 0.1
+    I, so the gate cuts only what the model would rarely choose."""
 
-    p_det: float = 0.7
-    """Probability that a track is detected in a cycle (seed 000 Sec. IV-C, from Luber & Arras 2013)."""
+    p_det: float = param(0.7, "probability a track is detected in a cycle (seed 000 Sec. IV-C)", min=0.0,
+                         exclusive_min=True, max=1.0)
+    """Seed 000 Sec. IV-C takes it from Luber & Arras 2013."""
 
-    p_occ: float = 0.27
-    """Probability that a track is occluded in a cycle (seed 000 Sec. IV-C)."""
+    p_occ: float = param(0.27, "probability a track is occluded in a cycle (seed 000 Sec. IV-C)", min=0.0,
+                         exclusive_min=True, max=1.0)
 
-    p_del: float = 0.03
-    """Probability that a track is deleted (left the scene) in a cycle (seed 000 Sec. IV-C). p_det + p_occ + p_del
-    must be 1: the three labels are a track's only fates."""
+    p_del: float = param(0.03, "probability a track is deleted in a cycle (seed 000 Sec. IV-C); p_det + p_occ + p_del "
+                               "= 1", min=0.0, exclusive_min=True, max=1.0)
+    """Deleted: the track left the scene. The three labels are a track's only fates, hence the sum."""
 
-    lambda_new: float = 0.005
-    """Poisson rate of new tracks, per m^2 and cycle (seed 000 Sec. IV-C, hand-tuned there)."""
+    lambda_new: float = param(0.005, "1/(m^2 cycle), Poisson rate of new tracks (seed 000 Sec. IV-C)", min=0.0,
+                              exclusive_min=True)
+    """Hand-tuned in seed 000."""
 
-    lambda_fal: float = 0.005
-    """Poisson rate of false alarms, per m^2 and cycle (seed 000 Sec. IV-C, hand-tuned there)."""
+    lambda_fal: float = param(0.005, "1/(m^2 cycle), Poisson rate of false alarms (seed 000 Sec. IV-C)", min=0.0,
+                              exclusive_min=True)
+    """Hand-tuned in seed 000."""
 
-    n_scan: int = 30
-    """n-scanback pruning depth in cycles (seed 000 Sec. IV-C: n = 30)."""
+    n_scan: int = param(30, "cycles of n-scanback pruning (seed 000 Sec. IV-C: 30)", min=1)
 
-    n_delete: int = 10
-    """Cycles without a detection that delete a track in every hypothesis (seed 000 Sec. IV-C: "at most 10 cycles
-    without detection"; without it, occluded tracks stayed too long in the PedSim scenario)."""
+    n_delete: int = param(10, "cycles without a detection that delete a track (seed 000 Sec. IV-C: 10)", min=1)
+    """In every hypothesis (seed 000 Sec. IV-C: "at most 10 cycles without detection"; without it, occluded tracks
+    stayed too long in the PedSim scenario)."""
 
-    max_hypotheses: int = 50
-    """Hypotheses generated (and kept) per cycle: the k of Cox & Hingorani's k-best. Seed 000 instead stops
-    generating after t_max = 0.03 s per cycle, which makes results depend on the machine and its load; a count keeps
-    them deterministic. On seed 000's crowded data (PedSim, 79 tracks on average, Table I) t_max is what binds, so
-    the count is calibrated there: on a synthetic crowd of 80 at 25 Hz this implementation takes 0.022-0.032 s of
-    CPU per cycle with 50 hypotheses (0.037-0.048 s with 100), on an Intel Xeon core with Python 3.11; a crowd of 30
-    takes 0.008-0.011 s with 50, so there t_max would allow about 150."""
+    max_hypotheses: int = param(50, "hypotheses generated per cycle, in place of seed 000's t_max = 0.03 s so results "
+                                    "do not depend on the machine (about 0.03 s with 80 people; "
+                                    "pipeline/tracking/mht.py)", min=1)
+    """Generated (and kept) per cycle: the k of Cox & Hingorani's k-best. Seed 000 instead stops generating after
+    t_max = 0.03 s per cycle, which makes results depend on the machine and its load; a count keeps them
+    deterministic. On seed 000's crowded data (PedSim, 79 tracks on average, Table I) t_max is what binds, so the
+    count is calibrated there: on a synthetic crowd of 80 at 25 Hz this implementation takes 0.022-0.032 s of CPU per
+    cycle with 50 hypotheses (0.037-0.048 s with 100), on an Intel Xeon core with Python 3.11; a crowd of 30 takes
+    0.008-0.011 s with 50, so there t_max would allow about 150."""
 
-    n_confirm: int = 3
-    """Detections (the creating one included) before a track is output: the NNT's, so both trackers show a person
-    after the same number of detections and differ in data association only. Seed 000's MHT has no initiation logic
-    (Sec. V-E); 2 would suffice to tell a new track from a false alarm (lambda_new = lambda_fal), but at the seed's
-    rates one false alarm inside a missed tentative track's grown gate is likelier the same object (p_det N p_occ^k)
-    than a second false alarm (lambda_fal), so 2 confirmed chance pairs of false alarms."""
+    n_confirm: int = param(3, "detections before a track is output (the NNT's)", min=1)
+    """The creating one included: the NNT's, so both trackers show a person after the same number of detections and
+    differ in data association only. Seed 000's MHT has no initiation logic (Sec. V-E); 2 would suffice to tell a
+    new track from a false alarm (lambda_new = lambda_fal), but at the seed's rates one false alarm inside a missed
+    tentative track's grown gate is likelier the same object (p_det N p_occ^k) than a second false alarm
+    (lambda_fal), so 2 confirmed chance pairs of false alarms."""
 
-    initial_velocity_variance: float = 1.0
-    """Per-axis velocity variance (m^2/s^2) of a new track: the NNT's (E[vx^2] of a 1.3 m/s walker, rounded up)."""
+    initial_velocity_variance: float = param(1.0, "m^2/s^2 of a new track", min=0.0, exclusive_min=True)
+    """Per axis: the NNT's (E[vx^2] of a 1.3 m/s walker, rounded up)."""
 
-    def __post_init__(self) -> None:
-        for name in ("process_noise", "gate_chi2", "lambda_new", "lambda_fal", "initial_velocity_variance"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0.0):
-                raise ValueError(f"{name} must be finite and > 0, got {value}")
-        for name in ("p_det", "p_occ", "p_del"):
-            if not 0.0 < getattr(self, name) <= 1.0:
-                raise ValueError(f"{name} must be in (0, 1], got {getattr(self, name)}")
-        if abs(self.p_det + self.p_occ + self.p_del - 1.0) > 1e-9:
-            raise ValueError(f"p_det + p_occ + p_del must be 1, got {self.p_det + self.p_occ + self.p_del}")
-        for name in ("n_scan", "n_delete", "max_hypotheses", "n_confirm"):
-            if int(getattr(self, name)) < 1:
-                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
+    CHECKS = (_outcomes_sum_to_one,)
 
 
 # ----------------------------------------------------------------------------------------------------------------

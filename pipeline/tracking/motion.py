@@ -25,7 +25,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from .params import param
+from ..params import param
 
 __all__ = ["COMPONENTS", "MODELS", "INITIAL_VARIANCE", "state_layout", "layout_with", "ConstantVelocity",
            "ConstantAcceleration", "CoordinatedTurn", "Brownian"]

@@ -73,7 +73,7 @@ from .deletion import DELETIONS
 from .duplicates import DUPLICATES
 from .imm import MOTION, as_filter
 from .initiation import INITIATIONS
-from .params import Slot, made
+from ..params import Slot, made
 
 __all__ = ["TrackColumns", "NearestNeighbourTracker", "CycleRate", "bench_detections", "bench_cycles"]
 

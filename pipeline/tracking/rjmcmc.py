@@ -71,18 +71,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.appearance import bhattacharyya, bin_image, blend, histogram
+from pipeline.params import param
 from pipeline.types import DetectedPersons, TrackedPersons
 
-# seed 001 Table 1
+# seed 001 Table 1 (crowdsim/experiments/seed001.py's "all sensors")
 TABLE1_WEIGHTS = {"laser/legs": 0.16, "laser/blobs": 0.16, "camera_1/fseg": 0.22, "camera_1/hog": 0.2,
                   "camera_2/fseg": 0.22, "camera_2/hog": 0.2}
-TABLE1_PROPOSALS = ("laser/legs", "camera_1/fseg", "camera_1/hog", "camera_2/fseg", "camera_2/hog")
-# false detections per m^2 and cycle of each likelihood source, measured on training sequences of seed 001's room
-# (seed001_room_3 at seed 4000 and _2 at 4001, which the experiment does not use): detections farther than 0.5 m from
-# everyone, over the room's 82 m^2
-TABLE1_CLUTTER = {"laser/blobs": 0.08, "camera_1/fseg": 0.003, "camera_1/hog": 0.006, "camera_2/fseg": 0.003,
-                  "camera_2/hog": 0.006}
-TABLE1_LIKELIHOOD = ("laser/blobs", "camera_1/fseg", "camera_1/hog", "camera_2/fseg", "camera_2/hog")
 PERSON = (0.5, 1.7)  # m, width and height of the average person whose box gives a target's colour
 CELL = 0.05  # m, floor cells over which a box histogram is reused within a cycle
 EMPTY_MEAN = 1e-3  # Eq. 5's value for a state without targets (``likelihood: mean``)
@@ -142,57 +136,87 @@ def person_box(view: View, x: float, y: float) -> tuple[int, int, int, int] | No
     return box
 
 
+def _sources(p: dict):
+    w = p["weights"]
+    for key in ("proposal_sources", "likelihood_sources"):
+        if not any(w.get(s, 0.0) > 0 for s in p[key]):
+            return key, f"{p[key]}; expected at least one source with a positive weight under weights"
+    missing = [s for s in p["likelihood_sources"] if w.get(s, 0.0) > 0 and s not in p["clutter"]]
+    if p["likelihood"] == "pooled" and missing:
+        return "clutter", f"has no rate for {', '.join(missing)}; expected one for each likelihood source"
+
+
+def _move_probabilities(p: dict):
+    q = p["move_probabilities"]
+    if len(q) != 4 or abs(sum(q) - 1.0) > 1e-9:
+        return "move_probabilities", f"{q}; expected 4 values (add, update, remove, swap) summing to 1"
+
+
+@dataclass(eq=False)
 class RjmcmcTracker:
     """The ``rjmcmc`` tracker: seed 001's filter (module docstring). The defaults are its Table 1 where it has them;
     the pooled likelihood's own (p_detect, clutter, looks, newcomer, survival) were measured or chosen on training
     sequences of its room (``crowdsim experiment seed001 --tune``)."""
 
-    def __init__(self, weights: dict | None = None, proposal_sources=TABLE1_PROPOSALS,
-                 likelihood_sources=TABLE1_LIKELIHOOD, move_probabilities=(0.15, 0.8, 0.02, 0.03),
-                 step_variance: float = 0.09, interaction_sd: float = 0.75, samples: int = 150, burn_in: int = 40,
-                 likelihood: str = "pooled", p_detect: float = 0.7, clutter: dict | None = None,
-                 looks: float = 2.0, newcomer: float = 0.0003, survival: float = 0.6, birth_floor: float = 0.01,
-                 colour_lambda: float = 20.0, alpha: float = 0.9, update_threshold: float = 0.24,
-                 reid_threshold: float = 0.1, seed: int = 0):
-        self.weights = dict(TABLE1_WEIGHTS if weights is None else weights)
-        self.proposal_sources = [s for s in proposal_sources if self.weights.get(s, 0.0) > 0]
-        self.likelihood_sources = [s for s in likelihood_sources if self.weights.get(s, 0.0) > 0]
-        if not self.proposal_sources or not self.likelihood_sources:
-            raise ValueError("weights: expected a positive weight for at least one proposal source and one "
-                             f"likelihood source, not {self.weights}")
-        q = np.asarray(move_probabilities, float)
-        if q.shape != (4,) or (q < 0).any() or not np.isclose(q.sum(), 1.0):
-            raise ValueError(f"move_probabilities: expected 4 values (add, update, remove, swap) summing to 1, "
-                             f"not {list(move_probabilities)}")
-        if likelihood not in ("pooled", "mean"):
-            raise ValueError(f"likelihood: expected 'pooled' or 'mean', not {likelihood!r}")
-        self.clutter = dict(TABLE1_CLUTTER if clutter is None else clutter)
-        if not 0 < p_detect <= 1 or any(self.clutter.get(s, 0.0) <= 0 for s in self.likelihood_sources):
-            raise ValueError(f"p_detect, clutter: expected 0 < p_detect <= 1 and a clutter above 0 for each likelihood "
-                             f"source {self.likelihood_sources}, not {p_detect}, {self.clutter}")
-        self.q = q
-        self.inv_2var = 1.0 / (2.0 * step_variance)
-        self.step_sd = math.sqrt(step_variance)
-        self.interaction_sd = interaction_sd
-        self.samples, self.burn_in = int(samples), int(burn_in)
-        self.likelihood = likelihood
-        self.p_detect = p_detect
-        self.looks = looks
+    weights: dict = param(TABLE1_WEIGHTS, "k_d per detection source (`sensor/batch`, as the detectors name their "
+                                          "batches; Table 1)", item=dict(min=0.0))
+    proposal_sources: list = param(["laser/legs", "camera_1/fseg", "camera_1/hog", "camera_2/fseg", "camera_2/hog"],
+                                   "the sources where targets are born (Eq. 2: the leg detector's persons and the "
+                                   "cameras')")
+    likelihood_sources: list = param(["laser/blobs", "camera_1/fseg", "camera_1/hog", "camera_2/fseg",
+                                      "camera_2/hog"], "the sources the likelihood weighs (Eq. 5: the laser's raw "
+                                                       "blobs l_b and the cameras')")
+    move_probabilities: list = param([0.15, 0.8, 0.02, 0.03], "q_m of add, update, remove, swap (Table 1)",
+                                     item=dict(min=0.0, max=1.0), min_items=4)
+    step_variance: float = param(0.09, "m^2, Sigma of the random walk and of every Gaussian kernel (Table 1)",
+                                 min=0.0, exclusive_min=True)
+    interaction_sd: float = param(0.75, "m, sigma of the MRF (Eq. 4, Table 1)", min=0.0, exclusive_min=True)
+    samples: int = param(150, "N, particles kept per cycle (Table 1)", min=1)
+    burn_in: int = param(40, "N_B, burn-in steps per cycle (Table 1)", min=0)
+    likelihood: str = param("pooled", "pooled: each source's detections a Poisson process of clutter and of the "
+                                      "targets, the sources pooled with the weights k_d, each target with a prior "
+                                      "(ours); mean: Eq. 5 as written", choices=("pooled", "mean"))
+    p_detect: float = param(0.7, "pooled: chance that a source sees a person in its view", min=0.0,
+                            exclusive_min=True, max=1.0)
+    # measured on training sequences (seed001_room_3 at seed 4000 and _2 at 4001, which the experiment does not use):
+    # detections farther than 0.5 m from everyone, over the room's 82 m^2
+    clutter: dict = param({"laser/blobs": 0.08, "camera_1/fseg": 0.003, "camera_1/hog": 0.006,
+                           "camera_2/fseg": 0.003, "camera_2/hog": 0.006},
+                          "pooled: false detections per m^2 and cycle of each likelihood source (measured on "
+                          "training sequences of seed 001's room)", item=dict(min=0.0, exclusive_min=True))
+    looks: float = param(2.0, "pooled: the independent sources whose evidence the weights k_d (summing to 1) share "
+                              "out", min=0.0, exclusive_min=True)
+    newcomer: float = param(0.0003, "pooled: prior odds of a person not tracked before, per kernel area (2 pi Sigma "
+                                    "= 0.57 m^2)", min=0.0, exclusive_min=True)
+    survival: float = param(0.6, "pooled: chance that a tracked person is still there a cycle later", min=0.0,
+                            exclusive_min=True, max=0.999)
+    birth_floor: float = param(0.01, "least birth density (kernel units): where no detection is, a target can still "
+                                     "be removed", min=0.0, exclusive_min=True)
+    colour_lambda: float = param(20.0, "lambda of exp(-lambda B^2) (Perez et al. 2002; seed 001: none)", min=0.0)
+    alpha: float = param(0.9, "colour model update weight (Eq. 6, Table 1)", min=0.0, max=1.0)
+    update_threshold: float = param(0.24, "beta_t: the model follows only closer histograms", min=0.0, max=1.0)
+    reid_threshold: float = param(0.1, "beta_o: a new id this close to a gone person's model takes their id",
+                                  min=0.0, max=1.0)
+    seed: int = param(0, "the filter's random stream (one run = one draw; seed 001 reports eight)")
+
+    CHECKS = (_sources, _move_probabilities)
+
+    def __post_init__(self) -> None:
+        """What the chain uses, made from the parameters (which the scenario format has checked)."""
+        self._proposal = [s for s in self.proposal_sources if self.weights.get(s, 0.0) > 0]
+        self._likelihood = [s for s in self.likelihood_sources if self.weights.get(s, 0.0) > 0]
+        self.q = np.asarray(self.move_probabilities, float)
+        self.inv_2var = 1.0 / (2.0 * self.step_variance)
+        self.step_sd = math.sqrt(self.step_variance)
         # per source, a detection's density from a target at its kernel's peak over the clutter's: p_D N(0; Sigma) /
-        # kappa_d
-        self.gain = {s: p_detect / (2 * math.pi * step_variance * self.clutter[s]) for s in self.likelihood_sources}
-        self.birth_floor = birth_floor
+        # kappa_d (``pooled`` only: ``mean`` has no clutter)
+        pooled = self.likelihood == "pooled"
+        self.gain = {s: self.p_detect / (2 * math.pi * self.step_variance * self.clutter[s]) if pooled else 0.0
+                     for s in self._likelihood}
         # a target's prior odds against no target, in kernel units (per kernel area 2 pi Sigma): ``newcomer`` for one
         # not tracked before; r s / (1 - r s) times its predictive for one that the share r of the last cycle's
         # particles held, s = ``survival``
-        self.log_newcomer = math.log(newcomer)
-        if not 0 < survival < 1 or newcomer <= 0:
-            raise ValueError(f"survival, newcomer: expected 0 < survival < 1 and newcomer > 0, not {survival}, "
-                             f"{newcomer}")
-        self.survival = survival
-        self.colour_lambda, self.alpha = colour_lambda, alpha
-        self.update_threshold, self.reid_threshold = update_threshold, reid_threshold
-        self.seed = seed
+        self.log_newcomer = math.log(self.newcomer)
         self.reset()
 
     def reset(self) -> None:
@@ -239,7 +263,7 @@ class RjmcmcTracker:
 
         self._est_xy = np.array(list(self._estimate.values())).reshape(-1, 2)
         self._est_points = self._est_xy.tolist()
-        prop = [(rows(s), self.weights[s]) for s in self.proposal_sources]
+        prop = [(rows(s), self.weights[s]) for s in self._proposal]
         prop = [(r, k / len(r)) for r, k in prop if len(r)]
         self._prop_rows = np.concatenate([r for r, _ in prop]) if prop else np.zeros(0, np.int64)
         self._prop_xy = xy[self._prop_rows]
@@ -249,7 +273,7 @@ class RjmcmcTracker:
         self._birth_p = birth / total if total > 0 else birth  # Q_add's mixture weights
         self._birth_cdf = np.cumsum(self._birth_p)
         self._births: list[tuple[float, float, int]] = []  # this cycle's births: where, which id
-        like = [(rows(s), s) for s in self.likelihood_sources]
+        like = [(rows(s), s) for s in self._likelihood]
         self._like_xy = np.concatenate([xy[r] for r, _ in like])
         # k_d, summing to 1 over a mode's sources, share out the evidence of ``looks`` independent sources
         self._like_w = np.concatenate([np.full(len(r), self.weights[s] * self.looks) for r, s in like])

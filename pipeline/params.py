@@ -1,4 +1,4 @@
-"""How the tracker's parts declare their parameters, once, on the class; and how a tracker is given its parts.
+"""How every part declares its parameters, once, on the class; and how a part is given its own parts.
 
 Why: a part's parameter (its default, allowed range, unit and where the value comes from) was written in the scenario
 format and again in the tracker, with tests to keep the copies equal. Each part is now a dataclass whose fields are
@@ -14,20 +14,30 @@ import dataclasses
 import importlib
 from typing import Any, NamedTuple
 
-__all__ = ["param", "Slot", "made"]
+__all__ = ["param", "ordered", "Slot", "made"]
 
 
-def param(default: Any, doc: str, *, min: float | None = None, max: float | None = None,
+def param(default: Any, doc: str, *, kind: str | None = None, min: float | None = None, max: float | None = None,
           exclusive_min: bool = False, choices: tuple | None = None, item: dict | None = None,
           parts: Slot | None = None, min_items: int = 0) -> Any:
     """A dataclass field that is a parameter of its part: ``doc`` gives its unit and the seed section (or the
     measurement) its default comes from; its kind is its default's (int, float, str, bool, or a list: of ``item``,
-    keyword arguments of ``param`` without the default and doc, or of parts of the ``parts`` slot)."""
-    limits = dict(doc=doc, min=min, max=max, exclusive_min=exclusive_min, choices=choices, item=item, parts=parts,
-                  min_items=min_items)
-    if isinstance(default, list):
+    keyword arguments of ``param`` without the default and doc, or of parts of the ``parts`` slot; or a mapping of
+    names to ``item``s), or ``kind`` where the default does not tell it: a default None (the parameter may be left
+    out) or a point (``point3``)."""
+    limits = dict(doc=doc, kind=kind, min=min, max=max, exclusive_min=exclusive_min, choices=choices, item=item,
+                  parts=parts, min_items=min_items)
+    if isinstance(default, (list, dict)):
         return dataclasses.field(default_factory=lambda: copy.deepcopy(default), metadata={"param": limits})
     return dataclasses.field(default=default, metadata={"param": limits})
+
+
+def ordered(low: str, high: str, strict: bool = False):
+    """A check across a part's parameters (its ``CHECKS``): ``low`` at most (``strict``: below) ``high``."""
+    def check(p: dict):
+        if p[low] > p[high] or (strict and p[low] == p[high]):
+            return low, f"{p[low]:g}; expected {'below' if strict else 'at most'} {high} ({p[high]:g})"
+    return check
 
 
 class Slot(NamedTuple):
