@@ -43,11 +43,11 @@ def _cmd_run(args) -> int:
     from .run import cameras_line, navigation_tables, run, summary_table
 
     scenario = _load(args, args.scenario, seed=args.seed, duration=args.duration)
-    out = run_dir(args, scenario["name"])
+    out = run_dir(args, scenario.name)
     metrics = run(scenario, out, rrd=args.rrd, progress=not args.quiet)
     print(summary_table(metrics))
     if "navigation" in metrics:
-        print(f"\nnavigation ({'goal' if scenario['robot']['driver'] == 'goals' else 'following'}, "
+        print(f"\nnavigation ({'goal' if scenario.robot.driver == 'goals' else 'following'}, "
               f"{metrics['duration_s']:.1f} s recorded):\n")
         print(navigation_tables(metrics["navigation"]))
         print()
@@ -178,9 +178,9 @@ def _cmd_report(args) -> int:
     scenario = load_scenario(str(run_dir / "scenario.yaml"), allow_large=True)  # it ran as it is
     out = Path(args.out) if args.out else run_dir / "report"
     check_out_dir(out)
-    title = f"{scenario['name']}, seed {scenario['seed']}"
+    title = f"{scenario.name}, seed {scenario.seed}"
     tracking = write_directory(out, lambda tmp: write_report(tmp, run_dir, wall_segments(scenario),
-                                                             scenario["evaluation"]["threshold"], title))
+                                                             scenario.evaluation.threshold, title))
     print(f"MOTA {pct(tracking['mota'])}, IDF1 {pct(tracking['idf1'])}; report: {out / 'report.md'}")
     return 0
 
@@ -197,12 +197,13 @@ def _cmd_scenarios(args) -> int:
 
 def _cmd_validate_scenario(args) -> int:
     sc = _load(args, args.file)
-    counts = {k: len(sc[k]) for k in ("waypoints", "queues", "routes", "sources", "clusters", "standing")}
-    walls = sum(len(w) - 1 for w in sc["map"]["walls"]) + sum(len(o) for o in sc["map"]["obstacles"])
-    print(f"{args.file}: valid scenario {sc['name']!r}: {walls} wall segments, "
+    counts = {"waypoints": len(sc.waypoints), "queues": len(sc.queues), "routes": len(sc.routes),
+              "sources": len(sc.sources), "clusters": len(sc.clusters), "standing": len(sc.standing)}
+    walls = len(sc.map.segments)
+    print(f"{args.file}: valid scenario {sc.name!r}: {walls} wall segments, "
           + ", ".join(f"{n} {k}" for k, n in counts.items())
-          + f", {len(sc['sensors']['lasers'])} laser(s), {len(sc['sensors']['depth_cameras'])} depth camera(s), "
-          f"{len(sc['sensors']['wall_cameras'])} wall camera(s); seed {sc['seed']}, {sc['duration']:g} s")
+          + f", {len(sc.sensors.lasers)} laser(s), {len(sc.sensors.depth_cameras)} depth camera(s), "
+          f"{len(sc.sensors.wall_cameras)} wall camera(s); seed {sc.seed}, {sc.duration:g} s")
     return 0
 
 

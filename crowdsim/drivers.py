@@ -20,6 +20,7 @@ from pipeline.navigation.follow import PersonFollower
 from pipeline.navigation.planners import build_planner
 from pipeline.software import Perception
 from pipeline.types import LaserScan, TagReading
+from scenarios.typed import Section, plain
 
 
 @dataclass
@@ -58,15 +59,15 @@ class RouteDriver(Driver):
 
     name = "route"
 
-    def __init__(self, robot: dict, source: str = "<scenario>"):
+    def __init__(self, robot: Section, source: str = "<scenario>"):
         self.p = robot
-        self.route = np.asarray(robot["route"], float) if robot["route"] else np.zeros((0, 2))
+        self.route = np.asarray(robot.route, float) if robot.route else np.zeros((0, 2))
 
     def reset(self) -> None:
         self.target = 0
 
     def command(self, world, scans: Scans) -> tuple[float, float]:
-        return self.steer(world.robot.pose, front_clearance(scans, self.p["radius"]))
+        return self.steer(world.robot.pose, front_clearance(scans, self.p.radius))
 
     def steer(self, pose: np.ndarray, front_clearance: float) -> tuple[float, float]:
         """(v, omega) from ``pose`` towards the next route point; none when something is nearer than the safety
@@ -77,15 +78,15 @@ class RouteDriver(Driver):
         if np.linalg.norm(goal - pose[:2]) < 0.5:
             self.target += 1
             if self.target >= len(self.route):
-                if not self.p["loop"]:
+                if not self.p.loop:
                     return 0.0, 0.0
                 self.target = 0
             goal = self.route[self.target]
         d = goal - pose[:2]
         err = float(wrap_angle(np.arctan2(d[1], d[0]) - pose[2]))
         omega = 2.0 * err
-        v = self.p["max_speed"] * max(0.0, np.cos(err)) if abs(err) < np.pi / 3 else 0.0
-        if front_clearance < self.p["safety_distance"]:
+        v = self.p.max_speed * max(0.0, np.cos(err)) if abs(err) < np.pi / 3 else 0.0
+        if front_clearance < self.p.safety_distance:
             v = 0.0
         return v, omega
 
@@ -96,9 +97,9 @@ class ScriptDriver(Driver):
 
     name = "script"
 
-    def __init__(self, robot: dict, source: str = "<scenario>"):
-        self.rows = np.asarray(robot["script"], float)
-        self.loop = robot["loop"]
+    def __init__(self, robot: Section, source: str = "<scenario>"):
+        self.rows = np.asarray(robot.script, float)
+        self.loop = robot.loop
 
     def command(self, world, scans: Scans) -> tuple[float, float]:
         return self.at(world.robot.clock)
@@ -128,10 +129,10 @@ class GoalsDriver(PlannerDriver):
 
     name = "goals"
 
-    def __init__(self, robot: dict, source: str):
-        self.planner = build_planner(robot["planner"], robot, source)
-        self.goals = np.asarray(robot["goals"] or np.zeros((0, 2)), float).reshape(-1, 2)
-        self.radius = robot["goal_radius"]
+    def __init__(self, robot: Section, source: str):
+        self.planner = build_planner(plain(robot.planner), plain(robot), source)
+        self.goals = np.asarray(robot.goals or np.zeros((0, 2)), float).reshape(-1, 2)
+        self.radius = robot.goal_radius
 
     def reset(self) -> None:
         super().reset()
@@ -160,9 +161,9 @@ class FollowDriver(PlannerDriver):
 
     name = "follow"
 
-    def __init__(self, robot: dict, source: str):
-        self.planner = build_planner(robot["planner"], robot, source)
-        self.follower = PersonFollower(self.planner, tuple(robot["follow"]["band"]))
+    def __init__(self, robot: Section, source: str):
+        self.planner = build_planner(plain(robot.planner), plain(robot), source)
+        self.follower = PersonFollower(self.planner, tuple(robot.follow.band))
 
     def reset(self) -> None:
         super().reset()
@@ -178,9 +179,9 @@ class FollowDriver(PlannerDriver):
 DRIVERS: dict[str, type[Driver]] = {d.name: d for d in (RouteDriver, ScriptDriver, GoalsDriver, FollowDriver)}
 
 
-def make_driver(robot: dict, source: str) -> Driver:
+def make_driver(robot: Section, source: str) -> Driver:
     """The driver ``robot.driver`` names, made from the validated ``robot`` section of the scenario ``source``."""
-    return DRIVERS[robot["driver"]](robot, source)
+    return DRIVERS[robot.driver](robot, source)
 
 
 def front_clearance(scans: Scans, radius: float) -> float:

@@ -16,12 +16,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pipeline.assemble import build_pipeline
+from pipeline.assemble import build_pipeline, make_user_part
 from pipeline.software import RobotSoftware
 from pipeline.types import (CameraFrame, DepthFrame, DetectedPersons, GroundTruthTags, LaserScan, SocialRelations,
                             TagReading, TrackedGroups, TrackedPersons, Visibility)
 from scenarios.errors import Error
-from scenarios.geometry import wall_segments
+from scenarios.typed import Scenario, plain
 from sensors import Scene, parts_at
 from sensors.base import capture_due
 from sensors.camera import DepthCamera, WallCamera
@@ -81,38 +81,38 @@ class Timing:
     crowd_s: float = 0.0
 
 
-def stream_names(scenario: dict) -> list[str]:
+def stream_names(scenario: Scenario) -> list[str]:
     """The random streams, in the order they are spawned from the scenario seed: each part keeps the child stream
     it had when it was added (the third is no longer drawn from; the tag reader came last)."""
-    sensors = scenario["sensors"]
-    return ["crowd", "robot", "unused", *(f"laser:{p['name']}" for p in sensors["lasers"]),
-            *(f"depth_camera:{p['name']}" for p in sensors["depth_cameras"]), "tag"]
+    sensors = scenario.sensors
+    return ["crowd", "robot", "unused", *(f"laser:{p.name}" for p in sensors.lasers),
+            *(f"depth_camera:{p.name}" for p in sensors.depth_cameras), "tag"]
 
 
 class Simulation:
-    def __init__(self, scenario: dict):
+    def __init__(self, scenario: Scenario):
         self.scenario = scenario
-        source = scenario.get("source", "<scenario>")
-        self.walls = wall_segments(scenario)
-        self.dt = scenario["dt"]
-        sensors = scenario["sensors"]
-        radius, capacity = scenario["robot"]["radius"], scenario["crowd"]["max_agents"]
+        source = scenario.source
+        self.walls = scenario.map.segments
+        self.dt = scenario.dt
+        sensors = scenario.sensors
+        radius, capacity = scenario.robot.radius, scenario.crowd.max_agents
         # the lasers' scene holds only the body parts at their heights (a ray cast costs per geom of the model);
         # cameras, which see whole people, get a scene of their own
-        seen = set().union(*(parts_at(laser["height"]) for laser in sensors["lasers"]))
+        seen = set().union(*(parts_at(laser.height) for laser in sensors.lasers))
         self.scene = Scene(self.walls, radius, capacity, seen)
-        self.camera_scene = (Scene(self.walls, radius, capacity, PARTS, sensors["depth_cameras"],
-                                   sensors["wall_cameras"])
-                             if sensors["depth_cameras"] or sensors["wall_cameras"] else None)
+        self.camera_scene = (Scene(self.walls, radius, capacity, PARTS, plain(sensors.depth_cameras),
+                                   plain(sensors.wall_cameras))
+                             if sensors.depth_cameras or sensors.wall_cameras else None)
         # cameras hold GL contexts, and a user's parts may be costly to make: made once, started over at each reset
-        self.depth_cameras = [DepthCamera(p, self.camera_scene, np.random.default_rng(0))
-                              for p in sensors["depth_cameras"]]
-        self.wall_cameras = [WallCamera(p, self.camera_scene) for p in sensors["wall_cameras"]]
-        self.custom_sensors = [_user_sensor(spec, source, k) for k, spec in enumerate(sensors["custom"] or [])]
-        self.software = RobotSoftware(build_pipeline(scenario["pipeline"], [p["name"] for p in sensors["lasers"]],
-                                                     scenario["map"], source))
-        self.driver = make_driver(scenario["robot"], source)
-        self.cycle_sensor = scenario["pipeline"]["cycle"]
+        self.depth_cameras = [DepthCamera(plain(p), self.camera_scene, np.random.default_rng(0))
+                              for p in sensors.depth_cameras]
+        self.wall_cameras = [WallCamera(plain(p), self.camera_scene) for p in sensors.wall_cameras]
+        self.custom_sensors = [_user_sensor(spec, source, k) for k, spec in enumerate(sensors.custom or ())]
+        self.software = RobotSoftware(build_pipeline(scenario.pipeline, [p.name for p in sensors.lasers],
+                                                     scenario.map, source))
+        self.driver = make_driver(scenario.robot, source)
+        self.cycle_sensor = scenario.pipeline.cycle
         self.reset()
 
     @property
@@ -133,16 +133,16 @@ class Simulation:
         start, the software's parts, the driver and the ground truth started over. The MuJoCo scenes are kept;
         nothing else carries over."""
         scenario = self.scenario
-        self.seed = scenario["seed"] if seed is None else int(seed)
+        self.seed = scenario.seed if seed is None else int(seed)
         names = stream_names(scenario)
         rng = dict(zip(names, (np.random.default_rng(s) for s in np.random.SeedSequence(self.seed).spawn(len(names)))))
-        follow = scenario["robot"]["follow"]["target"] if scenario["robot"]["driver"] == "follow" else None
+        follow = scenario.robot.follow.target if scenario.robot.driver == "follow" else None
         self.world = World(scenario, self.walls, rng["crowd"], rng["robot"], follow)
-        self.lasers = [Laser(p, self.scene, rng[f"laser:{p['name']}"]) for p in scenario["sensors"]["lasers"]]
+        self.lasers = [Laser(plain(p), self.scene, rng[f"laser:{p.name}"]) for p in scenario.sensors.lasers]
         self.laser_array = LaserArray(self.lasers, self.scene)  # all lasers due at a tick in one ray call
         for camera in self.depth_cameras:
             camera.rng = rng[f"depth_camera:{camera.name}"]
-        self.tag = TagSensor(scenario["sensors"]["tag"], rng["tag"]) if follow is not None else None
+        self.tag = TagSensor(plain(scenario.sensors.tag), rng["tag"]) if follow is not None else None
         # the capture order (cameras, then the lasers in one batched call) fixes the order in which detections
         # reach the fusion, and with them the fused detections' ids
         self.sensors = [*self.depth_cameras, *self.wall_cameras, *self.lasers, *self.custom_sensors,
@@ -152,7 +152,7 @@ class Simulation:
         for sensor in self.custom_sensors:
             if hasattr(sensor, "reset"):
                 sensor.reset()
-        self.truth = GroundTruth(scenario["evaluation"]["max_range"], self.cycle_sensor,
+        self.truth = GroundTruth(scenario.evaluation.max_range, self.cycle_sensor,
                                  [*self.lasers, *self.depth_cameras, *self.wall_cameras, *self.custom_sensors],
                                  {laser.name: laser for laser in self.lasers})
         self._own_sensors = [s.name for s in (*self.lasers, *self.depth_cameras, *self.custom_sensors)]
@@ -167,7 +167,7 @@ class Simulation:
 
     def warm_up(self) -> None:
         """Crowd-only simulation for the scenario's warm-up, with the robot standing at its start."""
-        self.world.warm_up(self.scenario["warmup"])
+        self.world.warm_up(self.scenario.warmup)
         for sensor in self.sensors:
             sensor.start(self.world.t)
 
@@ -252,11 +252,9 @@ class Simulation:
                     return
 
 
-def _user_sensor(spec: dict, source: str, k: int):
+def _user_sensor(spec, source: str, k: int):
     """A user's sensor class ``module.path:ClassName`` (``sensors.custom[k].type``) made with its keys."""
-    from pipeline.assemble import make_user_part
-    return make_user_part(spec["type"], {key: v for key, v in spec.items() if key != "type"}, source,
-                          f"sensors.custom[{k}]")
+    return make_user_part(spec.type, spec.params, source, f"sensors.custom[{k}]")
 
 
 def _command(command) -> tuple[float, float]:

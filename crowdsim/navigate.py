@@ -26,6 +26,7 @@ from evaluation.navigation_report import OUTCOME_COLUMNS, SOCIAL_COLUMNS, json_s
 from scenarios import ScenarioError
 from scenarios.format import PLANNER
 from scenarios.schema import validate
+from scenarios.typed import Scenario, plain
 
 from .loop import Simulation
 from .run import navigation_spec
@@ -40,19 +41,20 @@ FOLLOW_COLUMNS = ("success", "in_band_share", "distance_error", "target_losses",
                   "personal_share", "min_time_to_collision", "crossings_front", "crossings_behind")
 
 
-def with_planner(scenario: dict, planner: str | None) -> dict:
+def with_planner(scenario: Scenario, planner: str | None) -> Scenario:
     """The scenario with ``robot.planner`` of type ``planner``: its own parameters when it names that type
     already (or ``planner`` is None), the type's defaults otherwise. A scenario whose robot drives its route has no
     planner to change: ScenarioError naming robot.driver."""
-    robot = scenario["robot"]
-    if robot["driver"] not in ("goals", "follow"):
-        raise ScenarioError(scenario["source"], "robot.driver",
-                            f"{robot['driver']} (the robot drives its {robot['driver']}, no planner); expected goals "
+    robot = scenario.robot
+    if robot.driver not in ("goals", "follow"):
+        raise ScenarioError(scenario.source, "robot.driver",
+                            f"{robot.driver} (the robot drives its {robot.driver}, no planner); expected goals "
                             "or follow: crowdsim navigate compares planners on a scenario whose robot drives to "
                             "goals or follows a person")
-    spec = robot["planner"] if planner in (None, robot["planner"]["type"]) else validate(
-        {"type": planner}, PLANNER, "--planner", "robot.planner")
-    return {**scenario, "robot": {**robot, "planner": spec}}
+    if planner in (None, robot.planner.type):
+        return scenario
+    return scenario.replace(robot=robot.replace(planner=validate({"type": planner}, PLANNER, "--planner",
+                                                                 "robot.planner")))
 
 
 def episode_metrics(sim: Simulation, seed: int, duration: float) -> dict:
@@ -76,8 +78,8 @@ def episode_metrics(sim: Simulation, seed: int, duration: float) -> dict:
     persons = PersonRows(np.concatenate(frame_of), np.concatenate(ids), np.concatenate(position),
                          np.concatenate(velocity), np.concatenate(radius))
     # the task as crowdsim run writes it to navigation.json and read_nav_run takes it from there
-    task = navigation_task(navigation_spec({**sim.scenario, "duration": duration}, sim.target_id),
-                           f"{sim.scenario.get('source', sim.scenario['name'])}: the navigation task")
+    task = navigation_task(navigation_spec(sim.scenario.replace(duration=duration), sim.target_id),
+                           f"{sim.scenario.source}: the navigation task")
     following = {}
     if task["task"] == "follow":
         track, visible = np.array(follow).T
@@ -89,7 +91,7 @@ def episode_metrics(sim: Simulation, seed: int, duration: float) -> dict:
 _worker: dict = {}
 
 
-def _start_worker(scenario: dict, duration: float) -> None:
+def _start_worker(scenario: Scenario, duration: float) -> None:
     _worker["sim"], _worker["duration"] = Simulation(scenario), duration
 
 
@@ -97,11 +99,11 @@ def _run_seed(seed: int) -> dict:
     return episode_metrics(_worker["sim"], seed, _worker["duration"])
 
 
-def navigate(scenario: dict, seeds: list[int], duration: float, workers: int = 1, progress: bool = True) -> list[dict]:
+def navigate(scenario: Scenario, seeds: list[int], duration: float, workers: int = 1, progress: bool = True) -> list[dict]:
     """The navigation figures of each seed's episode, in the order of ``seeds``; over ``workers`` processes (each
     with a simulation of its own) when more than one."""
     bar = tqdm(total=len(seeds), unit="seed", disable=not progress,
-               desc=f"{scenario['name']} / {scenario['robot']['planner']['type']}")
+               desc=f"{scenario.name} / {scenario.robot.planner.type}")
     try:
         if workers <= 1:
             sim = Simulation(scenario)
@@ -143,7 +145,7 @@ def summary(runs: list[dict], task: str) -> str:
     return "\n".join([line, "", *table[:2], mean_row, sd_row])
 
 
-def navigate_main(scenario: dict, planner: str | None, first_seed: int, n_seeds: int, duration: float | None,
+def navigate_main(scenario: Scenario, planner: str | None, first_seed: int, n_seeds: int, duration: float | None,
                   json_path: Path | None, workers: int = 1, progress: bool = True) -> str:
     """``crowdsim navigate``: the table (and, with ``json_path``, a new file with every episode's figures)."""
     if json_path is not None and Path(json_path).exists():
@@ -157,17 +159,17 @@ def navigate_main(scenario: dict, planner: str | None, first_seed: int, n_seeds:
     if first_seed < 0:
         raise EvaluationInputError(f"--first-seed: expected a seed of at least 0, got {first_seed}")
     scenario = with_planner(scenario, planner)
-    duration = scenario["duration"] if duration is None else float(duration)
+    duration = scenario.duration if duration is None else float(duration)
     seeds = list(range(first_seed, first_seed + n_seeds))
     runs = navigate(scenario, seeds, duration, workers, progress)
-    task = "goal" if scenario["robot"]["driver"] == "goals" else "follow"
+    task = "goal" if scenario.robot.driver == "goals" else "follow"
     if json_path is not None:
         mean, sd = mean_sd(runs)
         Path(json_path).write_text(json.dumps({
-            "scenario": scenario["name"], "planner": scenario["robot"]["planner"], "task": task,
+            "scenario": scenario.name, "planner": plain(scenario.robot.planner), "task": task,
             "duration_s": duration, "seeds": seeds, "counts": counts(runs),
             "runs": [{"seed": seed, **json_safe(r)} for seed, r in zip(seeds, runs)],
             "mean": json_safe(mean), "sd": json_safe(sd)}, indent=2) + "\n")
-    head = (f"{scenario['name']}, planner {scenario['robot']['planner']['type']}, seeds {seeds[0]}..{seeds[-1]}, "
+    head = (f"{scenario.name}, planner {scenario.robot.planner.type}, seeds {seeds[0]}..{seeds[-1]}, "
             f"{duration:g} s each: mean and sd over the {len(runs)} episodes")
     return head + "\n\n" + summary(runs, task)

@@ -5,15 +5,16 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.frames import compose, inverse
+from scenarios.typed import Section
 
 
 class Robot:
     """True pose in ``world``; odometry pose in ``odom`` (which starts at the robot's start pose)."""
 
-    def __init__(self, params: dict, rng: np.random.Generator):
+    def __init__(self, params: Section, rng: np.random.Generator):
         self.p = params
         self.rng = rng
-        self.pose = np.array(params["start"], float)
+        self.pose = np.array(params.start, float)
         self.odom_pose = np.zeros(3)
         self.velocity = np.zeros(2)  # (v, omega) executed last step
         self.clock = 0.0  # s the robot has been driven (the warm-up not counted)
@@ -41,22 +42,22 @@ class Robot:
         grows in proportion to the distance driven and the angle turned, so that the drift does not depend on the
         time step.
         """
-        o = self.p["odometry"]
-        d = distance * (1.0 + o["distance_scale_error"])
-        t = turn + o["yaw_drift"] * distance
-        if o["distance_noise"] > 0:
-            d += o["distance_noise"] * np.sqrt(abs(distance)) * self.rng.standard_normal()
-        yaw_var = o["yaw_noise"] ** 2 * abs(turn) + o["yaw_noise_per_distance"] ** 2 * abs(distance)
+        o = self.p.odometry
+        d = distance * (1.0 + o.distance_scale_error)
+        t = turn + o.yaw_drift * distance
+        if o.distance_noise > 0:
+            d += o.distance_noise * np.sqrt(abs(distance)) * self.rng.standard_normal()
+        yaw_var = o.yaw_noise ** 2 * abs(turn) + o.yaw_noise_per_distance ** 2 * abs(distance)
         if yaw_var > 0:
             t += np.sqrt(yaw_var) * self.rng.standard_normal()
         return d, t
 
 
-def limited(command: np.ndarray, velocity: np.ndarray, p: dict, dt: float) -> np.ndarray:
+def limited(command: np.ndarray, velocity: np.ndarray, p: Section, dt: float) -> np.ndarray:
     """Commands (v, omega) [..., 2] as the drive executes them after ``velocity`` [..., 2]: within the acceleration
     limits of one step ``dt``, then within the speed limits."""
-    step = np.array([p["max_acceleration"], p["max_angular_acceleration"]]) * dt
-    top = np.array([p["max_speed"], p["max_angular_speed"]])
+    step = np.array([p.max_acceleration, p.max_angular_acceleration]) * dt
+    top = np.array([p.max_speed, p.max_angular_speed])
     # np.minimum/maximum: np.clip's wrapper costs more than the work on a handful of robots
     return np.minimum(np.maximum(np.minimum(np.maximum(command, velocity - step), velocity + step), -top), top)
 

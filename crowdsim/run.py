@@ -34,7 +34,7 @@ from evaluation.group_score import groups_table, score_groups
 from evaluation.score import score_tracking, tracking_table
 from evaluation.stream import CsvPair
 from pipeline.frames import compose, inverse
-from scenarios.geometry import wall_segments
+from scenarios.typed import Scenario, as_written
 
 from .loop import Simulation
 from .outdir import write_directory
@@ -73,15 +73,6 @@ def csv_format(columns: Columns, real: str = "%.4f", t: str = "%.2f") -> list[st
 ROBOT_FORMAT = csv_format(ROBOT, EXACT, EXACT)
 PERSONS_FORMAT = csv_format(PERSONS, EXACT, EXACT)
 FOLLOWING_FORMAT = csv_format(FOLLOWING, EXACT, EXACT)
-
-
-def _without_unset(value):
-    """The data without the optional keys left unset (None), which a scenario file leaves out."""
-    if isinstance(value, dict):
-        return {k: _without_unset(v) for k, v in value.items() if v is not None}
-    if isinstance(value, list):
-        return [_without_unset(v) for v in value]
-    return value
 
 
 def _row_of(ids: np.ndarray, query: np.ndarray) -> np.ndarray:
@@ -125,15 +116,15 @@ def _person_rows(frame) -> np.ndarray:
                             a.radius])
 
 
-def navigation_spec(scenario: dict, target_id: int) -> dict:
+def navigation_spec(scenario: Scenario, target_id: int) -> dict:
     """navigation.json's content (docs/navigation-metrics.md): the task of the scenario's driver, the time limit
     (the scenario's duration), the robot's radius and the walls. A goals driver's task is its last goal."""
-    robot = scenario["robot"]
-    spec = {"robot_radius": robot["radius"], "time_limit": scenario["duration"],
-            "walls": wall_segments(scenario).reshape(-1, 4).tolist()}
-    if robot["driver"] == "goals":
-        return {"task": "goal", "goal": list(robot["goals"][-1]), "goal_radius": robot["goal_radius"], **spec}
-    return {"task": "follow", "target_id": int(target_id), "band": list(robot["follow"]["band"]), **spec}
+    robot = scenario.robot
+    spec = {"robot_radius": robot.radius, "time_limit": scenario.duration,
+            "walls": scenario.map.segments.reshape(-1, 4).tolist()}
+    if robot.driver == "goals":
+        return {"task": "goal", "goal": list(robot.goals[-1]), "goal_radius": robot.goal_radius, **spec}
+    return {"task": "follow", "target_id": int(target_id), "band": list(robot.follow.band), **spec}
 
 
 def _gt_rows(frame) -> np.ndarray:
@@ -255,12 +246,12 @@ def cameras_line(metrics: dict, before: str = "") -> str:
                    for backend, names in by_renderer.items())
 
 
-def run(scenario: dict, out: Path, rrd: bool = False, progress: bool = True) -> dict:
+def run(scenario: Scenario, out: Path, rrd: bool = False, progress: bool = True) -> dict:
     """Simulate, score and write ``out``; return metrics.json's content."""
     return write_directory(out, lambda tmp: _simulate(scenario, tmp, rrd, progress))
 
 
-def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
+def _simulate(scenario: Scenario, tmp: Path, rrd: bool, progress: bool) -> dict:
     sim = Simulation(scenario)
     start = time.perf_counter()
     sim.warm_up()
@@ -269,7 +260,7 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
     if rrd:
         from .recording import Recording  # rerun, imported only for a recording: 50 MB of memory
 
-        recording = Recording(tmp / "recording.rrd", wall_segments(scenario), sim)
+        recording = Recording(tmp / "recording.rrd", scenario.map.segments, sim)
     sensors = [laser.name for laser in sim.lasers] + [camera.name for camera in (*sim.depth_cameras,
                                                                                  *sim.wall_cameras)]
     csv = {"groundtruth": CsvWriter(tmp, GROUNDTRUTH), "tracks": CsvWriter(tmp, TRACKS),
@@ -281,11 +272,11 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         csv["persons"] = CsvWriter(tmp, PERSONS, PERSONS_FORMAT)
     if sim.driver.name == "follow":
         csv["following"] = CsvWriter(tmp, FOLLOWING, FOLLOWING_FORMAT)
-    duration = scenario["duration"]
+    duration = scenario.duration
     picture = Picture(max(1, math.ceil(duration / PICTURE_SECONDS - 1e-9)))
     written: dict[str, float] = {}
     frames, persons, most = 0, 0, 0  # tracking cycles; persons in range summed over them, and at most
-    bar = tqdm(total=round(duration, 2), unit="sim s", disable=not progress, desc=scenario["name"],
+    bar = tqdm(total=round(duration, 2), unit="sim s", disable=not progress, desc=scenario.name,
                bar_format="{l_bar}{bar}| {n:.1f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
     t0 = sim.crowd.t
     try:
@@ -323,25 +314,25 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         (tmp / "navigation.json").write_text(json.dumps(navigation_spec(scenario, sim.target_id), indent=1) + "\n")
     cameras = {camera.name: camera.backend for camera in (*sim.depth_cameras, *sim.wall_cameras)}
     # the scenario as run, every default filled in: a scenario file that runs again as it is
-    resolved = _without_unset({key: value for key, value in scenario.items() if key != "source"})
-    (tmp / "scenario.yaml").write_text(f"# resolved from {scenario['source']}\n"
+    resolved = {key: value for key, value in as_written(scenario).items() if key != "source"}
+    (tmp / "scenario.yaml").write_text(f"# resolved from {scenario.source}\n"
                                        + yaml.safe_dump(resolved, sort_keys=False))
     # the simulation is done with: what it held goes back before the scoring needs memory
     del sim, recording
     release_memory()
     # scored from the files as written, so that `crowdsim evaluate` on them gives the same figures
     tracking = score_tracking(CsvPair(tmp / GROUNDTRUTH.file, tmp / TRACKS.file),
-                              scenario["evaluation"]["threshold"])
+                              scenario.evaluation.threshold)
     groups = score_groups(*(tmp / c.file for c in (GROUNDTRUTH, TRACKS, RELATIONS, GROUPS)),
-                          scenario["evaluation"]["threshold"])
+                          scenario.evaluation.threshold)
     release_memory()  # and the scoring's memory before the drawing's
     from .plot import plot_run  # matplotlib, imported once the scoring is done: 20 MB less at its peak
 
-    plot_run(tmp / "topdown.png", wall_segments(scenario), picture, f"{scenario['name']}, seed {scenario['seed']}")
+    plot_run(tmp / "topdown.png", scenario.map.segments, picture, f"{scenario.name}, seed {scenario.seed}")
     navigation = navigation_metrics(read_nav_run(tmp)) if navigating else None
     metrics = {
-        "scenario": scenario["name"],
-        "seed": scenario["seed"],
+        "scenario": scenario.name,
+        "seed": scenario.seed,
         "duration_s": duration,
         "frames": frames,  # tracking cycles (tracking.frames: those with any ground truth or track)
         "tracking": tracking,
@@ -368,8 +359,8 @@ def _simulate(scenario: dict, tmp: Path, rrd: bool, progress: bool) -> dict:
         table += "\n\n" + navigation_tables(navigation)
         metrics["navigation"] = navigation  # the caller gets the figures, NaN and inf as they are
     (tmp / "summary.md").write_text(
-        f"# {scenario['name']} (seed {scenario['seed']}, {duration:g} s)\n\n{table}\n\n"
-        f"Persons within {scenario['evaluation']['max_range']:g} m of the robot: "
+        f"# {scenario.name} (seed {scenario.seed}, {duration:g} s)\n\n{table}\n\n"
+        f"Persons within {scenario.evaluation.max_range:g} m of the robot: "
         f"{metrics['groundtruth']['mean_persons_in_range']:.1f} on average, "
         f"{metrics['groundtruth']['max_persons_in_range']} at most.{cameras_line(metrics, ' ')}\n\n"
         "![top-down view](topdown.png)\n")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from scenarios.geometry import closest_on_segments
+from scenarios.typed import Scenario, Section
 
 from .crowd import AgentStates, Crowd
 from .robot import Robot
@@ -19,12 +20,12 @@ class World:
     """``follow_target`` (the scenario's ``robot.follow.target``, or None) is the tagged person: they join the crowd
     at the first tick, when recording starts."""
 
-    def __init__(self, scenario: dict, walls: np.ndarray, crowd_rng: np.random.Generator,
-                 robot_rng: np.random.Generator, follow_target: dict | None = None):
+    def __init__(self, scenario: Scenario, walls: np.ndarray, crowd_rng: np.random.Generator,
+                 robot_rng: np.random.Generator, follow_target: Section | None = None):
         self.walls = walls
-        self.dt = scenario["dt"]
+        self.dt = scenario.dt
         self.crowd = Crowd(scenario, crowd_rng)
-        self.robot = Robot(scenario["robot"], robot_rng)
+        self.robot = Robot(scenario.robot, robot_rng)
         self.ticks = 0
         self._follow_target = follow_target
         self.tagged_id = -1  # the tagged person's crowd id, once placed
@@ -40,16 +41,16 @@ class World:
     def warm_up(self, duration: float) -> None:
         """Crowd-only simulation, the robot standing at its start."""
         for _ in range(int(round(duration / self.dt))):
-            self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p["radius"])
+            self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p.radius)
         self._agents = None
 
     def step(self, v: float, omega: float) -> None:
         """One tick: the crowd (reacting to the robot where it stands), then the robot by (v, omega)."""
         if self._follow_target is not None:
             target, self._follow_target = self._follow_target, None
-            self.tagged_id = int(self.crowd.add_walkers(np.array([target["start"]], float), target["route"],
-                                                        target["speed"], agent_type=target["agent_type"])[0])
-        self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p["radius"])
+            self.tagged_id = int(self.crowd.add_walkers(np.array([target.start], float), target.route,
+                                                        target.speed, agent_type=target.agent_type)[0])
+        self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p.radius)
         self.robot.step(v, omega, self.dt)
         self.ticks += 1
         self._agents = None
@@ -68,7 +69,7 @@ class World:
         return agents.position[row] if row < len(agents.id) and agents.id[row] == self.tagged_id else None
 
     def _check_collision(self) -> None:
-        xy, radius = self.robot.pose[:2], self.robot.p["radius"]
+        xy, radius = self.robot.pose[:2], self.robot.p.radius
         gap = np.inf
         if len(self.crowd.pos):
             gap = float((np.hypot(*(self.crowd.pos - xy).T) - self.crowd.radius).min()) - radius

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Protocol, Sequence
 
 from scenarios.schema import ScenarioError, import_class
+from scenarios.typed import plain
 
 from .detectors import DETECTORS
 from .fusion import FUSIONS
@@ -157,7 +158,8 @@ def make_user_part(path: str, params: dict, source: str, key: str):
 def build_part(spec: dict, registry: dict[str, type], source: str = "<pipeline>", key: str = "pipeline"):
     """The part ``spec`` names (``type`` and the parameters), made from its built-in type or a user's class (its
     outputs checked, ``check_outputs``); a parameter the part refuses (a model file that is not there, say) is a
-    ScenarioError of ``source`` at ``key``."""
+    ScenarioError of ``source`` at ``key``. ``spec`` may be a loaded scenario's section or its plain data."""
+    spec = plain(spec)
     params = {name: value for name, value in spec.items() if name != "type"}
     if spec["type"] in registry:
         try:
@@ -177,7 +179,8 @@ def build_pipeline(spec: dict, lasers: Sequence[str], floor_plan: dict | None = 
     """The parts of a validated ``pipeline`` section of the scenario ``source``: ``detector`` on each of ``lasers``
     (sensor names), and each sensor that ``detectors`` names gets its own detector in its place (None: none); the
     map filter, when the section has one, on ``floor_plan`` (the scenario's ``map``: the map the robot localises in;
-    None: no filter)."""
+    None: no filter). Both may be a loaded scenario's sections or the plain data of one."""
+    spec, floor_plan = plain(spec), plain(floor_plan)
     own = spec["detectors"]
 
     def detector(name):

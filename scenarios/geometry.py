@@ -6,12 +6,18 @@ import numpy as np
 
 
 def wall_segments(scenario: dict) -> np.ndarray:
-    """Every wall and obstacle edge as segments [m, 2, 2] (obstacle polygons are closed)."""
+    """Every wall and obstacle edge of a scenario's map as segments [m, 2, 2] (a loaded scenario has them as
+    ``scenario.map.segments``)."""
+    return segments_of(scenario["map"]["walls"], scenario["map"]["obstacles"])
+
+
+def segments_of(walls: list, obstacles: list) -> np.ndarray:
+    """Wall polylines and obstacle polygons as segments [m, 2, 2] (obstacle polygons are closed)."""
     segs = []
-    for line in scenario["map"]["walls"]:
+    for line in walls:
         p = np.asarray(line, float)
         segs.append(np.stack([p[:-1], p[1:]], axis=1))
-    for poly in scenario["map"]["obstacles"]:
+    for poly in obstacles:
         p = np.asarray(poly, float)
         segs.append(np.stack([p, np.roll(p, -1, axis=0)], axis=1))
     return np.concatenate(segs) if segs else np.zeros((0, 2, 2))

@@ -14,6 +14,7 @@ from .geometry import closest_on_segments, inside_polygon, wall_segments
 from .pedsim import pedsim_to_scenario
 from .reader import Replace, read_yaml
 from .schema import REMOVE, Field, MapOf, Schema, ScenarioError, Typed, validate
+from .typed import Scenario, plain, scenario_of
 
 BUNDLED = Path(__file__).parent / "bundled"
 MIN_EXTENT = 1.0  # m, walls whose extent is narrower than this in x or y (a single wall) bound no area
@@ -145,8 +146,9 @@ def _from_base(error: ScenarioError, origins: dict[str, str]) -> ScenarioError:
                                                   f"expected it overridden in {error.source} or fixed there)")
 
 
-def load_scenario(name_or_path: str, allow_large: bool = False, **overrides) -> dict:
-    """The validated scenario as plain data, defaults filled in; ``overrides`` replace top-level keys. A ``.xml``
+def load_scenario(name_or_path: str, allow_large: bool = False, **overrides) -> Scenario:
+    """The validated scenario (scenarios/typed.py: ``scenario.robot.radius``), defaults filled in; ``overrides``
+    replace top-level keys. A ``.xml``
     path is read as a PedSim scenario (``scenarios.pedsim``). ``allow_large`` lets a scenario past the cost limits
     run (scenarios/costs.py)."""
     path = resolve(name_or_path)
@@ -162,14 +164,14 @@ def load_scenario(name_or_path: str, allow_large: bool = False, **overrides) -> 
         raise _from_base(e, origins) from None
 
 
-def scenario_from_dict(raw: dict, source: str = "<scenario>", allow_large: bool = False) -> dict:
-    """Validate scenario data given as a dict (as a YAML file would hold it); ``source`` names it in errors. What the
-    scenario costs is checked too (scenarios/costs.py), unless ``allow_large``."""
-    scenario = validate(raw, SCENARIO, source)
+def scenario_from_dict(raw: dict, source: str = "<scenario>", allow_large: bool = False) -> Scenario:
+    """Validate scenario data given as a dict (as a YAML file would hold it; a Scenario too); ``source`` names it in
+    errors. What the scenario costs is checked too (scenarios/costs.py), unless ``allow_large``."""
+    scenario = validate(plain(raw), SCENARIO, source)
     check_geometry(scenario, source)
     check_costs(scenario, source, allow_large)
     scenario["source"] = source
-    return scenario
+    return scenario_of(scenario)
 
 
 def check_sensor(sensor: dict, key: str, dt: float, source: str) -> None:

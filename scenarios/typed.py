@@ -78,6 +78,22 @@ class Scenario(Section):
         return scenario_of(plain(super().replace(**changes)))
 
 
+class MapSection(Section):
+    """The map, with its walls and obstacle edges as segments [m, 2, 2] (made once)."""
+
+    __slots__ = ("_segments",)
+
+    @property
+    def segments(self):
+        try:
+            return self._segments
+        except AttributeError:
+            from .geometry import segments_of
+
+            object.__setattr__(self, "_segments", segments_of(plain(self.walls), plain(self.obstacles)))
+            return self._segments
+
+
 class Names(Mapping):
     """Named items (routes, waypoints, agent types), read-only, in the file's order."""
 
@@ -140,5 +156,18 @@ def scenario_of(data: dict) -> Scenario:
     """Validated scenario data (with its ``source``) as the typed Scenario."""
     from .format import SCENARIO
 
-    section = typed(data, SCENARIO)
-    return Scenario(section._values, SCENARIO)
+    values = typed(data, SCENARIO)._values
+    values["map"] = MapSection(values["map"]._values, values["map"]._spec)
+    return Scenario(values, SCENARIO)
+
+
+def as_written(value: Any) -> Any:
+    """The data as a scenario file writes it: the keys left unset (None) left out, so that it loads to the same
+    scenario; a named item given as null (a sensor without a detector) is kept."""
+    if isinstance(value, Section):
+        return {k: as_written(v) for k, v in value._values.items() if v is not None}
+    if isinstance(value, Names):
+        return {k: as_written(v) for k, v in value._items.items()}
+    if isinstance(value, (list, tuple)):
+        return [as_written(v) for v in value]
+    return value

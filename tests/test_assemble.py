@@ -8,7 +8,7 @@ import yaml
 from conftest import LASERS, room
 
 from crowdsim.loop import Simulation
-from crowdsim.run import _without_unset, run
+from crowdsim.run import run
 from pipeline.assemble import DETECTORS, TRACKERS, Detector, Fusion, GroupStage, Tracker, build_pipeline
 from pipeline.detectors.laser_segments import SegmentDetector
 from pipeline.fusion import NearestFusion
@@ -17,6 +17,7 @@ from pipeline.tracking.deletion import FixedDeletion
 from pipeline.tracking.nnt import NearestNeighbourTracker
 from pipeline.types import DetectedPersons, TrackedPersons
 from scenarios import ScenarioError, load_scenario, scenario_from_dict
+from scenarios.typed import as_written, plain
 from scenarios.format import DETECTOR, DETECTOR_READS, FUSION, GROUP_STAGE, GROUP_STAGE_TYPES, TRACKER, TRACKER_TYPES
 from scenarios.schema import Field, Schema
 from crowdsim.scoring import score_cycles
@@ -129,13 +130,13 @@ def test_old_keys_give_todays_parts_and_the_resolved_section_reloads_equal(tmp_p
     assert type(parts.tracker) is NearestNeighbourTracker and parts.tracker.frame == "odom"
     assert parts.tracker.deletion == FixedDeletion(n_delete=25)
     # what `crowdsim run` writes as scenario.yaml loads to the same scenario
-    again = load(tmp_path, _without_unset({k: v for k, v in sc.items() if k != "source"}))
+    again = load(tmp_path, {k: v for k, v in as_written(sc).items() if k != "source"})
     assert again == sc
 
 
 def test_a_user_tracker_runs_in_the_loop_and_is_scored(tmp_path):
     sc = scenario_from_dict(walkers({"tracker": {"type": "test_assemble:EchoTracker", "shift": [0.5, -0.25]}}))
-    assert sc["pipeline"]["tracker"] == {"type": "test_assemble:EchoTracker", "shift": [0.5, -0.25]}
+    assert plain(sc.pipeline.tracker) == {"type": "test_assemble:EchoTracker", "shift": [0.5, -0.25]}
     sim = Simulation(sc)
     tracker = sim.pipeline.tracker
     assert type(tracker).__name__ == "EchoTracker" and tracker.resets == 1
@@ -161,7 +162,7 @@ def test_a_user_tracker_runs_in_the_loop_and_is_scored(tmp_path):
 
 def test_a_user_class_with_a_schema_gets_its_defaults():
     sc = scenario_from_dict(walkers({"tracker": {"type": "test_assemble:SchemaTracker"}}))
-    assert sc["pipeline"]["tracker"] == {"type": "test_assemble:SchemaTracker", "shift": [0.25, 0.0]}
+    assert plain(sc.pipeline.tracker) == {"type": "test_assemble:SchemaTracker", "shift": [0.25, 0.0]}
     np.testing.assert_array_equal(Simulation(sc).pipeline.tracker.shift, [0.25, 0.0])
 
 

@@ -167,10 +167,10 @@ def test_variations_are_drawn_per_episode_and_recorded(room_file):
     alone = plan([sc], 3, seed=1, duration=None, rate=(0.5, 1.5), density=None, route_jitter=0.0)
     assert [j["variation"]["rate_scale"] for j in alone] == factors
     # a waypoint that would come too near a wall stays where it was
-    near = {**sc, "robot": {**sc["robot"], "start": [0.5, 5.0, 0.0]}}
+    near = sc.replace(robot=sc.robot.replace(start=[0.5, 5.0, 0.0]))
     rng = np.random.default_rng(0)
     varied, drawn = vary(near, rng, None, None, 0.2)
-    assert varied["robot"]["start"][:2] == [0.5, 5.0] and drawn["route_offsets"][0] == [0.0, 0.0]
+    assert varied["robot"]["start"][:2] == (0.5, 5.0) and drawn["route_offsets"][0] == [0.0, 0.0]
     assert [split_of(k) for k in range(10)].count("train") == 8
 
 

@@ -184,7 +184,7 @@ def test_discomfort_is_crowdnavs_below_two_decimetres():
     env.reset(seed=0)
     w = env.episodes.worlds
     w.robot_pose[0] = [5.0, 4.0, 0.0]
-    w.crowd_p = {**w.crowd_p, "random_force": 0.0, "robot_strength": 0.0}
+    w.crowd_p = w.crowd_p.replace(random_force=0.0, robot_strength=0.0)
     env.episodes.noise_rng[0] = np.random.default_rng(0)
     w.x[0], w.y[0], w.vx[0], w.vy[0] = 5.0, 4.775, 0.0, 0.0  # gap 0.1 m straight above the standing robot
     w.v0[0] = 0.0
@@ -209,7 +209,7 @@ def test_robot_visibility_changes_how_people_react():
         ep = Episodes(1, Config(people=1, robot_visible=visible))
         ep.reset(0, np.random.default_rng(0))
         w = ep.worlds
-        w.crowd_p = {**w.crowd_p, "random_force": 0.0}
+        w.crowd_p = w.crowd_p.replace(random_force=0.0)
         w.robot_pose[0] = [6.0, 4.0, 0.0]
         w.x[0], w.y[0], w.gx[0], w.gy[0], w.v0[0] = 3.0, 4.3, 11.0, 4.3, 1.2  # passing 0.3 m off the robot's centre
         closest[visible] = min(w.tick(np.zeros((1, 2)), np.zeros((1, 1), complex))[0] for _ in range(150))

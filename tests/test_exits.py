@@ -24,9 +24,9 @@ def with_sinks() -> list[str]:
             if any(route["sink"] for route in load_scenario(name)["routes"].values())]
 
 
-def lasers_only(scenario: dict) -> dict:
+def lasers_only(scenario):
     """The scenario without cameras: the lasers decide what is in view, and rendering would only cost time."""
-    return {**scenario, "sensors": {**scenario["sensors"], "depth_cameras": [], "wall_cameras": []}}
+    return scenario.replace(sensors=scenario.sensors.replace(depth_cameras=[], wall_cameras=[]))
 
 
 def exits(scenario: dict) -> np.ndarray:

@@ -10,6 +10,7 @@ from crowdsim.experiments.recorded import detect, record, track
 from crowdsim.experiments.table2 import ROWS, SCENARIO, WALKING, claims, replay, seed000_pipeline
 from crowdsim.loop import Simulation
 from scenarios import load_scenario
+from scenarios.typed import plain
 from crowdsim.scoring import score_cycles
 
 
@@ -23,7 +24,7 @@ def test_the_recorded_scans_replayed_through_the_airports_pipeline_score_what_th
     assert len(cycles) == len(frames) == 100  # 4 s of 25 Hz cycles
     run = score_cycles(frames, scenario["evaluation"]["threshold"])
     detections = detect(cycles, scenario["pipeline"], scenario["map"])
-    replayed = replay(cycles, detections, dict(scenario["pipeline"]["tracker"]))["all"]
+    replayed = replay(cycles, detections, plain(scenario["pipeline"]["tracker"]))["all"]
     assert replayed["mota"] == pytest.approx(100 * run.mota, abs=1e-12)
     assert replayed["ids"] == run.id_switches and replayed["hz"] > 0
     # seed 000's detector in the airport's place: its own detections, fused and map-filtered as the run's

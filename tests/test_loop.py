@@ -112,11 +112,12 @@ def test_reset_reruns_bit_for_bit_with_ids_from_one():
     assert min(first[0][0]) == 1  # ids restart at 1 after a reset
 
 
-def camera_room(seed=4):
-    """A 14 m x 10 m room with a source, two lasers, a front Kinect-like camera at 15 Hz and a wall camera at 10 Hz."""
+def camera_room(seed=4, change=lambda data: None):
+    """A 14 m x 10 m room with a source, two lasers, a front Kinect-like camera at 15 Hz and a wall camera at 10 Hz;
+    ``change`` changes its data before it is loaded."""
     from scenarios import scenario_from_dict
 
-    return scenario_from_dict({
+    data = {
         "name": "camera_room", "seed": seed, "warmup": 3.0, "duration": 2.0,
         "map": {"walls": [[[0, 0], [14, 0], [14, 10], [0, 10], [0, 0]]]},
         "waypoints": {"east": {"position": [12, 5], "radius": 1.0}},
@@ -128,7 +129,9 @@ def camera_room(seed=4):
                                {"name": "rear_laser", "mount": [-0.25, 0, 3.14159]}],
                     "depth_cameras": [{"name": "front_depth", "preset": "kinect_160", "rate": 15.0}],
                     "wall_cameras": [{"name": "corner_cam", "position": [0.3, 0.3, 2.8], "yaw": 0.6, "pitch": 0.45}]},
-    }, source="<test>")
+    }
+    change(data)
+    return scenario_from_dict(data, source="<test>")
 
 
 def test_cameras_run_at_their_rates_and_report_who_they_saw():
@@ -167,11 +170,11 @@ def test_cameras_run_at_their_rates_and_report_who_they_saw():
 def test_cameras_go_on_when_everyone_has_left():
     # four people walk from the room's middle to a sink 4 m away: once the last has left, the cameras' latest
     # frames still list who they saw, and the cycles go on with nobody
-    scenario = camera_room()
-    scenario.update(waypoints={"exit": {"position": [12.0, 10.0], "radius": 1.0}},
-                    routes={"out": {"waypoints": ["exit"], "sink": True}}, sources=[], standing=[],
-                    clusters=[{"position": [8.0, 10.0], "count": 4, "spread": [1.0, 1.0], "route": "out",
-                               "agent_type": "adult", "group_size_weights": [0.0, 1.0]}], warmup=0.0)
+    scenario = camera_room(change=lambda data: data.update(
+        waypoints={"exit": {"position": [12.0, 8.0], "radius": 1.0}},
+        routes={"out": {"waypoints": ["exit"], "sink": True}}, sources=[], standing=[],
+        clusters=[{"position": [8.0, 8.0], "count": 4, "spread": [1.0, 1.0], "route": "out",
+                   "agent_type": "adult", "group_size_weights": [0.0, 1.0]}], warmup=0.0))
     sim = Simulation(scenario)
     frames = list(sim.frames(8.0))
     alive = [len(f.agents.id) for f in frames]
@@ -197,8 +200,7 @@ def test_the_recording_holds_the_camera_images_boxes_and_the_robots_frames(tmp_p
     import sys
     from pathlib import Path
 
-    sc = camera_room()
-    sc["duration"] = 0.4
+    sc = camera_room().replace(duration=0.4)
     run(sc, tmp_path / "out", rrd=True, progress=False)
     rerun_cli = Path(sys.executable).parent / "rerun"  # the viewer's command line, installed with rerun-sdk
     listing = subprocess.run([str(rerun_cli), "rrd", "print", str(tmp_path / "out" / "recording.rrd")],
@@ -213,10 +215,11 @@ def test_the_recording_holds_the_camera_images_boxes_and_the_robots_frames(tmp_p
 def test_lasers_at_different_rates_keep_their_latest_scan():
     # a front laser at 12.5 Hz and a rear one at 25 Hz: the front one scans every other cycle; between its scans
     # its visibility is its latest scan's, not "everyone in view occluded"
-    sc = camera_room()
-    sc["sensors"]["depth_cameras"], sc["sensors"]["wall_cameras"] = [], []
-    sc["sensors"]["lasers"][0]["rate"] = 12.5
-    sim = Simulation(sc)
+    def two_lasers(data):
+        data["sensors"]["depth_cameras"], data["sensors"]["wall_cameras"] = [], []
+        data["sensors"]["lasers"][0]["rate"] = 12.5
+
+    sim = Simulation(camera_room(change=two_lasers))
     sim.warm_up()
     frames = list(sim.frames(0.4))
     # both due at the end of the warm-up (3 s), scanned at the first tick after it; then the front every 0.08 s

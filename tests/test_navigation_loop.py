@@ -115,7 +115,7 @@ def test_driver_defaults_and_the_tag_schema_matches_its_class(tmp_path):
     assert sc["sensors"]["tag"] is None
     assert {k: f.default for k, f in TAG.fields.items()} == TAG_DEFAULTS
     follow = load(tmp_path, follow_room())
-    assert follow["robot"]["follow"]["band"] == [1.0, 2.0] and follow["sensors"]["tag"] == TAG_DEFAULTS
+    assert follow.robot.follow.band == (1.0, 2.0) and follow.sensors.tag == TAG_DEFAULTS
 
 
 # ---- the loop ----

@@ -10,6 +10,7 @@ from xml.etree import ElementTree
 import pytest
 
 from scenarios import ScenarioError, load_scenario, scenario_from_dict
+from scenarios.typed import plain
 from scenarios.pedsim import GROUP_SIZE_WEIGHTS, PedsimWarning, pedsim_to_scenario
 
 DATA = Path(__file__).parent / "data" / "pedsim"
@@ -20,7 +21,7 @@ def quiet_load(path):
     """The validated scenario and the PedsimWarnings its import gave."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        scenario = load_scenario(str(path))
+        scenario = plain(load_scenario(str(path)))  # compared with the data a file would hold
     return scenario, [w for w in caught if issubclass(w.category, PedsimWarning)]
 
 
@@ -141,7 +142,7 @@ def test_airport_attractions_standing_person_and_parked_robot():
 def test_an_unknown_element_gives_one_warning_with_its_line(tmp_path):
     path = write(tmp_path, ROOM + '  <!-- a comment -->\n  <elevator id="lift" x="1" y="1"/>\n')  # line 11
     with pytest.warns(PedsimWarning) as caught:
-        sc = load_scenario(str(path))
+        sc = plain(load_scenario(str(path)))
     assert [str(w.message) for w in caught] == [
         f"{path}:11: <elevator id='lift'> is not a PedSim scenario element; ignored"]
     assert len(sc["map"]["walls"]) == 4
@@ -153,7 +154,7 @@ def test_an_attraction_is_imported_without_a_warning(tmp_path):
     path = write(tmp_path, ROOM + '  <attraction id="Shop1" x="10" y="8" width="4" height="2" strength="3"/>\n')
     with warnings.catch_warnings():
         warnings.simplefilter("error", PedsimWarning)
-        sc = load_scenario(str(path))
+        sc = plain(load_scenario(str(path)))
     assert sc["attractions"] == {"Shop1": {"position": [10, 8], "size": [4, 2], "strength": 3.0, "reach": 3.0,
                                            "visit_time": 10.0}}
 
@@ -168,7 +169,7 @@ def test_stray_stages_unknown_names_and_a_second_robot_warn_with_their_lines(tmp
   <agent x="12" y="2" n="1" dx="0" dy="0" type="2"/>
 """)
     with pytest.warns(PedsimWarning) as caught:
-        sc = load_scenario(str(path))
+        sc = plain(load_scenario(str(path)))
     assert [str(w.message) for w in caught] == [
         f"{path}:10: <addwaypoint id='a'> outside an <agent> or <source>; ignored",
         f"{path}:12: <addwaypoint id='nowhere'> names no waypoint or queue ('nowhere'); stage ignored",
@@ -187,7 +188,7 @@ def test_a_route_ends_at_its_first_sink(tmp_path):
   </agent>
 """)
     with pytest.warns(PedsimWarning) as caught:
-        sc = load_scenario(str(path))
+        sc = plain(load_scenario(str(path)))
     assert [str(w.message) for w in caught] == [
         f"{path}:13: <addwaypoint id='exit'> names the sink 'exit': persons leave there, so the stages after it "
         "are never reached; dropped"]
@@ -214,7 +215,7 @@ def test_places_on_a_wall_are_moved_off_it_with_a_warning(tmp_path):
   <queue id="desk" x="6" y="9.9" direction="270"/>
 """)
     with pytest.warns(PedsimWarning) as caught:
-        sc = load_scenario(str(path))
+        sc = plain(load_scenario(str(path)))
     assert [str(w.message) for w in caught] == [
         f"{path}:10: <waypoint id='door'> position (20, 5) lies 0.00 m from a wall; moved 0.30 m to (19.70, 5.00)",
         f"{path}:11: <queue id='desk'> position (6, 9.9) lies 0.10 m from a wall; moved 0.20 m to (6.00, 9.70)"]
@@ -226,7 +227,7 @@ def test_a_robot_next_to_a_wall_is_moved_to_clear_its_own_radius(tmp_path):
     body = ROOM.replace('<agent x="10" y="2"', '<agent x="10" y="0.2"')
     path = write(tmp_path, body)
     with pytest.warns(PedsimWarning, match=r"tiny.xml:9: <agent> robot start \(10, 0.2\) lies 0.20 m from a wall"):
-        sc = load_scenario(str(path))
+        sc = plain(load_scenario(str(path)))
     assert sc["robot"]["start"][:2] == pytest.approx([10, 0.475])
 
 
@@ -258,7 +259,7 @@ def test_redefined_names_warn_and_the_later_wins_and_big_crowds_raise_max_agents
   <agent x="10" y="5" n="450" dx="18" dy="8" type="0"><addqueue id="a"/><addwaypoint id="b"/></agent>
 """)
     with pytest.warns(PedsimWarning) as caught:
-        sc = load_scenario(str(path))
+        sc = plain(load_scenario(str(path)))
     assert [str(w.message) for w in caught] == [
         f"{path}:10: <queue id='a'> replaces the waypoint of the same name at line 7 (as in PedSim)"]
     assert "a" not in sc["waypoints"] and sc["queues"]["a"]["position"] == [4, 6]
@@ -303,7 +304,7 @@ def test_group_sizes_follow_pedsims_zero_truncated_poisson(tmp_path):
 
     from crowdsim.crowd import Crowd
 
-    crowd = Crowd(sc, np.random.default_rng(0))
+    crowd = Crowd(load_scenario(str(path)), np.random.default_rng(0))
     singles = int((crowd.group < 0).sum())
     sizes = np.unique(crowd.group[crowd.group >= 0], return_counts=True)[1]
     groups = singles + len(sizes)

@@ -52,8 +52,7 @@ def test_one_person_walking_away_is_detected_where_they_stand_and_tracked():
 
 def test_a_run_of_the_scripted_robot_writes_no_navigation_task(tmp_path):
     # the script driver has no goal or person to follow: crowdsim run writes the tracking outputs only
-    scenario = load_scenario("ktp_back_and_forth")
-    scenario["duration"] = 1.0
+    scenario = load_scenario("ktp_back_and_forth", duration=1.0)
     metrics = run(scenario, tmp_path / "run", progress=False)
     assert (tmp_path / "run" / "tracks.csv").exists() and not (tmp_path / "run" / "navigation.json").exists()
     assert metrics["frames"] == 30  # a cycle at each of the camera's 30 frames a second

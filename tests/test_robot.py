@@ -6,6 +6,7 @@ import pytest
 from crowdsim.robot import Robot, arc
 from scenarios.format import ROBOT
 from scenarios.schema import validate
+from scenarios.typed import typed
 
 
 def params(**kw):
@@ -13,7 +14,7 @@ def params(**kw):
     raw = {"start": [0.0, 0.0, 0.0], "max_speed": 1.0, "max_angular_speed": 2.0, "max_acceleration": 1e9,
            "max_angular_acceleration": 1e9}
     raw.update(kw)
-    return validate(raw, ROBOT, "<test>")
+    return typed(validate(raw, ROBOT, "<test>"), ROBOT)
 
 
 def test_quarter_circle():

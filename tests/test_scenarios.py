@@ -189,7 +189,7 @@ def test_goal_with_clearance_is_fine(tmp_path):
     data = base()
     data["waypoints"]["clear"] = {"position": [10, 0.3]}  # more than crowd.radius 0.25 from the wall
     path = write(tmp_path, data)
-    assert load_scenario(str(path))["waypoints"]["clear"]["position"] == [10.0, 0.3]
+    assert load_scenario(str(path)).waypoints["clear"].position == (10.0, 0.3)
 
 
 def test_robot_start_inside_a_wall(tmp_path):
@@ -413,11 +413,11 @@ def test_defaults_are_filled(tmp_path):
     sc = load_scenario(str(path))
     assert sc["evaluation"] == {"threshold": 1.0, "max_range": 20.0}
     assert sc["seed"] == 0 and sc["warmup"] == 0.0 and sc["dt"] == 0.04 and sc["description"] == ""
-    assert sc["map"]["obstacles"] == [] and sc["standing"] == []
+    assert sc.map.obstacles == () and sc.standing == ()
     adult = sc["crowd"]["agent_types"]["adult"]
     assert adult["radius"] == 0.25 and adult["speed_mean"] == 1.34
     src = sc["sources"][0]
-    assert src["size"] == [1.0, 1.0] and src["group_size_weights"] == [1.0]
+    assert src.size == (1.0, 1.0) and src.group_size_weights == (1.0,)
     assert src["start"] == 0.0 and src["stop"] == math.inf
     assert sc["routes"]["r"]["sink"] is True
     assert sc["waypoints"]["a"]["radius"] == 1.0 and sc["waypoints"]["b"]["radius"] == 0.5

@@ -9,7 +9,7 @@ from pipeline.detectors.hog import PERSON_SHARE, HogModel, load_model
 
 def test_the_training_room_streams_walkers_and_keeps_the_sequence_room():
     s = stream_scenario()
-    assert s["clusters"] == [] and len(s["sources"]) == 2
+    assert s["clusters"] == () and len(s["sources"]) == 2
     assert all(route["sink"] for route in s["routes"].values())
     assert [c["width"] for c in s["sensors"]["wall_cameras"]] == [640, 640]  # seed 001's cameras, as the sequences
 

@@ -13,6 +13,7 @@ import time
 import numpy as np
 
 from scenarios import scenario_from_dict
+from scenarios.typed import Scenario
 
 HALL = 40.0  # m, side of the walled hall the crowd benchmark walks in
 
@@ -44,7 +45,7 @@ def rate(fn, calls: int, blocks: int = 5) -> float:
     return float(np.median(rates))
 
 
-def bench_scenario(n_agents: int) -> dict:
+def bench_scenario(n_agents: int) -> Scenario:
     """A square walled hall with four corner waypoints that ``n_agents`` walkers circle round."""
     h = HALL
     return scenario_from_dict({

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 from scenarios import load_scenario
+from scenarios.typed import Scenario
 
 from ..datasets.episode import write_episode
 from ..datasets.layout import EPISODE_FILES
@@ -25,11 +26,11 @@ SENSOR_SETS = {"two lasers": "airport_disembarkation", "two lasers, two RGB-D an
                "airport_disembarkation_cameras"}
 
 
-def measure(scenario: dict, duration: float, compression: str) -> dict:
+def measure(scenario: Scenario, duration: float, compression: str) -> dict:
     """Frames/s of writing one episode, and each file's bytes per frame."""
     with tempfile.TemporaryDirectory() as folder:
         stamps = []
-        frames = write_episode(scenario, scenario["seed"], duration, Path(folder), compression,
+        frames = write_episode(scenario, scenario.seed, duration, Path(folder), compression,
                                lambda stamp: stamps.append(time.perf_counter()))
         sizes = {name: (Path(folder) / name).stat().st_size / frames for name in EPISODE_FILES}
     return {"frames": frames, "frames_per_s": (len(stamps) - 1) / (stamps[-1] - stamps[0]),

@@ -10,6 +10,7 @@ import time
 import numpy as np
 
 from scenarios import load_scenario
+from scenarios.typed import plain
 
 from .common import HALL, populated_crowd, rate, write_figures
 from .common import add_arguments  # noqa: F401  (its flags: those every benchmark takes)
@@ -26,10 +27,10 @@ def bench_laser(n_people: int, quick: bool) -> float:
     from sensors.body import body_scale
 
     crowd, scenario = populated_crowd(n_people)
-    scene = Scene(crowd.walls, 0.425, n_people, parts_at(scenario["sensors"]["lasers"][0]["height"]))
+    scene = Scene(crowd.walls, 0.425, n_people, parts_at(scenario.sensors.lasers[0].height))
     pose = np.array([HALL / 2, HALL / 2, 0.0])
     scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked, body_scale(crowd.id, crowd.radius))
-    laser = Laser(scenario["sensors"]["lasers"][0], scene, np.random.default_rng(0))
+    laser = Laser(plain(scenario.sensors.lasers[0]), scene, np.random.default_rng(0))
     return rate(lambda: laser.scan(0.0, pose), 50 if quick else 400)
 
 

@@ -19,6 +19,7 @@ import numpy as np
 
 from scenarios.format import DEPTH_CAMERA
 from scenarios.schema import validate
+from scenarios.typed import plain
 
 from .common import HALL, populated_crowd, rate, write_figures
 from .common import add_arguments  # noqa: F401  (its flags: those every benchmark takes)
@@ -44,7 +45,7 @@ def _setup(n_people: int, parts, cameras: bool):
     scale = body_scale(crowd.id, crowd.radius)
     sync = lambda: scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked, scale)  # noqa: E731
     sync()
-    lasers = [Laser(p, scene, np.random.default_rng(k)) for k, p in enumerate(scenario["sensors"]["lasers"])]
+    lasers = [Laser(plain(p), scene, np.random.default_rng(k)) for k, p in enumerate(scenario.sensors.lasers)]
     return scene, pose, sync, lasers, scenario
 
 
@@ -156,7 +157,7 @@ def airport_mix_ms(quick: bool, people: int = 100) -> dict:
     sim = Simulation(load_scenario("airport_disembarkation_cameras"))
     sim.warm_up()
     while len(sim.crowd.id) < people:
-        sim.crowd.step(sim.dt, sim.robot.pose[:2], sim.robot.p["radius"])
+        sim.crowd.step(sim.dt, sim.robot.pose[:2], sim.robot.p.radius)
     agents = sim.crowd.states()
     pick = slice(0, people)
     person = (agents.id[pick], agents.position[pick], agents.velocity[pick], agents.walked[pick],

@@ -36,6 +36,7 @@ import time
 import numpy as np
 
 from scenarios import scenario_from_dict
+from scenarios.typed import Scenario
 
 from .common import write_figures
 from .common import add_arguments  # noqa: F401  (its flags: those every benchmark takes)
@@ -56,7 +57,7 @@ MIN_OUR_STEPS = 10  # a timed span never covers fewer of our steps
 INSTALL_HINT = 'pip install -e ".[bench]"'
 
 
-def corridor_scenario(n_agents: int) -> dict:
+def corridor_scenario(n_agents: int) -> Scenario:
     """The walled corridor with one route to a sink at the far end."""
     length, width = CORRIDOR_LENGTH, CORRIDOR_WIDTH
     return scenario_from_dict({

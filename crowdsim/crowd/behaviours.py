@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from scenarios.geometry import closest_on_segments, segments_cross
+from scenarios.typed import Names, Scenario, Section
 
 if TYPE_CHECKING:
     from .crowd import Crowd
@@ -37,11 +38,11 @@ class PerAgent:
 class AgentTypes:
     """The agent types (adults, children, elders, ...): each with its desired-speed distribution and body radius."""
 
-    def __init__(self, types: dict):
+    def __init__(self, types: Names):
         self.names = list(types)
-        self.speed = np.array([[t["speed_mean"], t["speed_std"], t["speed_min"], t["speed_max"]]
+        self.speed = np.array([[t.speed_mean, t.speed_std, t.speed_min, t.speed_max]
                                for t in types.values()]).reshape(-1, 4)
-        self.radius = np.array([t["radius"] for t in types.values()])
+        self.radius = np.array([t.radius for t in types.values()])
 
     def desired_speeds(self, kind: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """One draw per agent from its type's clipped normal distribution."""
@@ -92,10 +93,10 @@ class Routes:
 
     columns = {"route": PerAgent(np.int64), "stage": PerAgent(np.int64, 0), "wait_end": PerAgent(float, np.nan)}
 
-    def __init__(self, scenario: dict):
-        self.names = list(scenario["routes"])
-        wps, queue_names = scenario["waypoints"], list(scenario["queues"])
-        length = max((len(r["waypoints"]) for r in scenario["routes"].values()), default=1)
+    def __init__(self, scenario: Scenario):
+        self.names = list(scenario.routes)
+        wps, queue_names = scenario.waypoints, list(scenario.queues)
+        length = max((len(r.waypoints) for r in scenario.routes.values()), default=1)
         shape = (max(len(self.names), 1), length)
         self.goal = np.zeros(shape + (2,))
         self.radius = np.ones(shape)
@@ -103,17 +104,17 @@ class Routes:
         self.queue = np.full(shape, -1, np.int64)  # the queue a stage is, -1 for a waypoint
         self.length = np.zeros(shape[0], np.int64)
         self.sink = np.zeros(shape[0], bool)
-        for k, route in enumerate(scenario["routes"].values()):
-            for i, stage in enumerate(route["waypoints"]):
+        for k, route in enumerate(scenario.routes.values()):
+            for i, stage in enumerate(route.waypoints):
                 if stage in queue_names:
-                    self.goal[k, i] = scenario["queues"][stage]["position"]
+                    self.goal[k, i] = scenario.queues[stage].position
                     self.queue[k, i] = queue_names.index(stage)
                 else:
-                    self.goal[k, i] = wps[stage]["position"]
-                    self.radius[k, i] = wps[stage]["radius"]
-                    self.wait[k, i] = wps[stage].get("wait", 0.0)  # dicts made by hand may leave it out
-            self.length[k] = len(route["waypoints"])
-            self.sink[k] = route["sink"]
+                    self.goal[k, i] = wps[stage].position
+                    self.radius[k, i] = wps[stage].radius
+                    self.wait[k, i] = wps[stage].wait
+            self.length[k] = len(route.waypoints)
+            self.sink[k] = route.sink
 
     def start(self, route: int, n: int) -> dict:
         """The route-related arrays of ``n`` persons starting on ``route``, for ``Crowd.add``."""
@@ -162,13 +163,13 @@ class Queues:
 
     columns = {"queued": PerAgent(np.int64, -1)}
 
-    def __init__(self, scenario: dict):
-        queues = scenario["queues"].values()
-        self.head = np.array([q["position"] for q in queues], float).reshape(-1, 2)
-        angle = np.radians([q["direction_deg"] for q in queues])
+    def __init__(self, scenario: Scenario):
+        queues = scenario.queues.values()
+        self.head = np.array([q.position for q in queues], float).reshape(-1, 2)
+        angle = np.radians([q.direction_deg for q in queues])
         self.direction = np.stack([np.cos(angle), np.sin(angle)], 1).reshape(-1, 2)
-        self.spacing = np.array([q["spacing"] for q in queues], float)
-        self.service_time = np.array([q["service_time"] for q in queues], float)
+        self.spacing = np.array([q.spacing for q in queues], float)
+        self.service_time = np.array([q.service_time for q in queues], float)
         self.members: list[list[int]] = [[] for _ in queues]  # ids in line, head first
         self.service_end = np.full(len(queues), np.nan)
 
@@ -211,14 +212,14 @@ class Attractions:
     rate proportional to its strength, lingers there for an exponential time, then takes up its route again.
     ``visiting`` is the attraction a person is at, -1 for none."""
 
-    def __init__(self, scenario: dict):
-        attractions = scenario["attractions"].values()
-        centre = np.array([a["position"] for a in attractions], float).reshape(-1, 2)
-        half = np.array([a["size"] for a in attractions], float).reshape(-1, 2) / 2
+    def __init__(self, scenario: Scenario):
+        attractions = scenario.attractions.values()
+        centre = np.array([a.position for a in attractions], float).reshape(-1, 2)
+        half = np.array([a.size for a in attractions], float).reshape(-1, 2) / 2
         self.lo, self.hi = centre - half, centre + half
-        self.rate = ATTRACTION_RATE * np.array([a["strength"] for a in attractions], float)
-        self.reach = np.array([a["reach"] for a in attractions], float)
-        self.visit_time = np.array([a["visit_time"] for a in attractions], float)
+        self.rate = ATTRACTION_RATE * np.array([a.strength for a in attractions], float)
+        self.reach = np.array([a.reach for a in attractions], float)
+        self.visit_time = np.array([a.visit_time for a in attractions], float)
         self.columns = {"visiting": PerAgent(np.int64, -1), "visit_end": PerAgent(float, 0.0),
                         "visited": PerAgent(bool, False, (len(self.rate),))}
 
@@ -331,17 +332,17 @@ class Sources:
     """Poisson arrivals of groups at the sources; a group is emitted side by side if the walls leave room, else one
     behind the other, else (or while others stand in the way) it waits."""
 
-    def __init__(self, specs: list[dict], types: AgentTypes, routes: Routes, rng: np.random.Generator):
+    def __init__(self, specs: tuple[Section, ...], types: AgentTypes, routes: Routes, rng: np.random.Generator):
         self.sources = []
         for s in specs:
-            weights = np.array(list(s["routes"].values()), float)
-            sizes = np.array(s["group_size_weights"], float)
+            weights = np.array(list(s.routes.values()), float)
+            sizes = np.array(s.group_size_weights, float)
             size_p = sizes / sizes.sum()
             mean_size = float((np.arange(1, sizes.size + 1) * size_p).sum())
-            type_w = np.array(list(s["agent_types"].values()), float)
-            src = Source(np.array(s["position"]), np.array(s["size"]), s["rate"] / mean_size, s["start"], s["stop"],
-                         np.array([routes.names.index(r) for r in s["routes"]]), weights / weights.sum(), size_p,
-                         np.array([types.names.index(t) for t in s["agent_types"]]), type_w / type_w.sum())
+            type_w = np.array(list(s.agent_types.values()), float)
+            src = Source(np.array(s.position), np.array(s.size), s.rate / mean_size, s.start, s.stop,
+                         np.array([routes.names.index(r) for r in s.routes]), weights / weights.sum(), size_p,
+                         np.array([types.names.index(t) for t in s.agent_types]), type_w / type_w.sum())
             src.next_time = src.start + self._interval(src, rng)
             self.sources.append(src)
 
@@ -375,7 +376,7 @@ class Sources:
                 break
         else:
             return False
-        if len(crowd.pos) + size > crowd.p["max_agents"]:
+        if len(crowd.pos) + size > crowd.p.max_agents:
             return False
         if len(crowd.pos):
             gap = np.linalg.norm(pos[:, None] - crowd.pos[None], axis=-1) - r[:, None] - crowd.radius[None]
@@ -396,29 +397,29 @@ def _clear_of_walls(walls: np.ndarray, centre: np.ndarray, pos: np.ndarray, r: n
                 and not segments_cross(np.repeat(centre[None], len(pos), 0), pos, walls).any())
 
 
-def place_standing(crowd: Crowd, standing: list[dict]) -> None:
+def place_standing(crowd: Crowd, standing: tuple[Section, ...]) -> None:
     """Single standing persons and static conversation groups, the members evenly on a circle ``spacing`` apart
     (turned at random), each holding their spot."""
     for g in standing:
-        centre, count = np.array(g["position"], float), g["count"]
+        centre, count = np.array(g.position, float), g.count
         if count == 1:
             pos = centre[None]
         else:
-            ring = g["spacing"] / (2 * np.sin(np.pi / count))
+            ring = g.spacing / (2 * np.sin(np.pi / count))
             a = 2 * np.pi * np.arange(count) / count + crowd.rng.uniform(0, 2 * np.pi)
             pos = centre + ring * np.stack([np.cos(a), np.sin(a)], 1)
-        kind = np.full(count, crowd.types.names.index(g["agent_type"]))
+        kind = np.full(count, crowd.types.names.index(g.agent_type))
         crowd.add(pos, crowd.types.desired_speeds(kind, crowd.rng), kind, crowd.groups.new(count), route=-1,
                   goal=pos.copy(), goal_radius=np.full(count, STANDING_RADIUS))
 
 
-def place_clusters(crowd: Crowd, clusters: list[dict]) -> None:
+def place_clusters(crowd: Crowd, clusters: tuple[Section, ...]) -> None:
     """PedSim's agent clusters: persons present from the start, spread at random over a rectangle, divided into
     groups, on a route."""
     for c in clusters:
-        count = c["count"]
-        kind = np.full(count, crowd.types.names.index(c["agent_type"]))
-        pos = np.asarray(c["position"]) + crowd.rng.uniform(-0.5, 0.5, (count, 2)) * c["spread"]
-        group = crowd.groups.divide(count, c["group_size_weights"], crowd.rng)
+        count = c.count
+        kind = np.full(count, crowd.types.names.index(c.agent_type))
+        pos = np.asarray(c.position) + crowd.rng.uniform(-0.5, 0.5, (count, 2)) * c.spread
+        group = crowd.groups.divide(count, c.group_size_weights, crowd.rng)
         v0 = at_slowest_pace(crowd.types.desired_speeds(kind, crowd.rng), group)
-        crowd.add(pos, v0, kind, group, **crowd.routes.start(crowd.routes.names.index(c["route"]), count))
+        crowd.add(pos, v0, kind, group, **crowd.routes.start(crowd.routes.names.index(c.route), count))

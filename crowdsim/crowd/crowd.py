@@ -15,6 +15,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from scenarios.geometry import segments_cross, wall_segments
+from scenarios.typed import Scenario
 
 from . import forces
 from .behaviours import (AgentTypes, Attractions, Escapes, GroupIds, PerAgent, Queues, Routes, Sources, place_clusters,
@@ -60,28 +61,28 @@ class Crowd:
     ascending); ``add`` and ``keep`` change them all together, and the contact solver's bodies with them.
     """
 
-    def __init__(self, scenario: dict, rng: np.random.Generator):
-        self.p = scenario["crowd"]
+    def __init__(self, scenario: Scenario, rng: np.random.Generator):
+        self.p = scenario.crowd
         self.rng = rng
         self.t = 0.0
         self.walls = wall_segments(scenario)
-        self.contacts = ContactSolver(self.walls, scenario["robot"]["radius"], self.p["max_agents"])
+        self.contacts = ContactSolver(self.walls, scenario.robot.radius, self.p.max_agents)
         self._robot_pos: np.ndarray | None = None
         self._next_id = 1
-        self.types = AgentTypes(self.p["agent_types"])
+        self.types = AgentTypes(self.p.agent_types)
         self.groups = GroupIds()
         self.routes = Routes(scenario)
         self.queues = Queues(scenario)
         self.attractions = Attractions(scenario)
-        self.escapes = Escapes(self.p["stuck_time"])
-        self.sources = Sources(scenario["sources"], self.types, self.routes, rng)
+        self.escapes = Escapes(self.p.stuck_time)
+        self.sources = Sources(scenario.sources, self.types, self.routes, rng)
         self.columns = dict(COLUMNS)
         for behaviour in (self.routes, self.queues, self.attractions, self.escapes):
             self.columns.update(behaviour.columns)
         for name, column in self.columns.items():
             setattr(self, name, np.zeros((0,) + column.shape, column.dtype))
-        place_standing(self, scenario["standing"])
-        place_clusters(self, scenario["clusters"])
+        place_standing(self, scenario.standing)
+        place_clusters(self, scenario.clusters)
 
     # -- population ---------------------------------------------------------------------------------------------
 
@@ -149,7 +150,7 @@ class Crowd:
         n = len(self.pos)
         # an unbalanced tree builds faster and queries no slower for crowds
         tree = cKDTree(self.pos, balanced_tree=False, compact_nodes=False) if n > 1 else None
-        pairs = (tree.query_pairs(p["interaction_range"], output_type="ndarray") if n > 1
+        pairs = (tree.query_pairs(p.interaction_range, output_type="ndarray") if n > 1
                  else np.zeros((0, 2), np.int64))
         return forces.pair_forces(p, self.pos, self.vel, e, pairs, walking=~self.holding)
 
@@ -157,19 +158,19 @@ class Crowd:
                      robot_radius: float) -> np.ndarray:
         """The sum of every force term on every agent, walking in directions ``e`` at desired ``speed``."""
         p = self.p
-        acc = forces.desired_force(e, speed, self.vel, p["relaxation_time"])
+        acc = forces.desired_force(e, speed, self.vel, p.relaxation_time)
         acc += self.interaction_forces(e)
-        acc += forces.wall_force(self.pos, self.radius, e, self.walls, p["wall_strength"], p["wall_range"],
-                                 p["wall_interaction_range"], p["fov_deg"], p["out_of_view_weight"]
+        acc += forces.wall_force(self.pos, self.radius, e, self.walls, p.wall_strength, p.wall_range,
+                                 p.wall_interaction_range, p.fov_deg, p.out_of_view_weight
                                  ) * self.escapes.repelled_by_walls(self)[:, None]
         walking_groups = np.where(self.holding, -1, self.group)
-        acc += forces.group_forces(self.pos, self.vel, e, self.radius, walking_groups, p["group_gaze"],
-                                   p["group_coherence"], p["group_repulsion"])
+        acc += forces.group_forces(self.pos, self.vel, e, self.radius, walking_groups, p.group_gaze,
+                                   p.group_coherence, p.group_repulsion)
         if robot_pos is not None:
-            acc += forces.obstacle_disc_force(self.pos, e, robot_pos, robot_radius, p["robot_strength"],
-                                              p["robot_range"], p["fov_deg"], p["out_of_view_weight"])
-        if p["random_force"] > 0:
-            acc += self.rng.normal(0.0, p["random_force"], acc.shape)
+            acc += forces.obstacle_disc_force(self.pos, e, robot_pos, robot_radius, p.robot_strength,
+                                              p.robot_range, p.fov_deg, p.out_of_view_weight)
+        if p.random_force > 0:
+            acc += self.rng.normal(0.0, p.random_force, acc.shape)
         return acc
 
     # -- stepping -----------------------------------------------------------------------------------------------
@@ -187,7 +188,7 @@ class Crowd:
             along = np.einsum("ij,ij->i", vel, e)
             back = ~self.holding & (along < 0)
             vel[back] -= along[back, None] * e[back]
-            vmax = self.p["max_speed_factor"] * self.v0
+            vmax = self.p.max_speed_factor * self.v0
             s = np.linalg.norm(vel, axis=1)
             vel *= np.minimum(1.0, vmax / np.maximum(s, 1e-9))[:, None]
             before = self.pos.copy()

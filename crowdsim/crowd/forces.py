@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from scenarios.geometry import near_segments, pair_vectors
+from scenarios.typed import Section
 
 
 NEGLIGIBLE = 0.005  # m/s^2: an interaction weaker than this (0.1% of Moussaid's A) is not computed
@@ -123,20 +124,20 @@ def _far(n: int) -> np.ndarray:
     return _FAR[n]
 
 
-def pair_forces(p: dict, pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, pairs: np.ndarray,
+def pair_forces(p: Section, pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, pairs: np.ndarray,
                 walking: np.ndarray | None = None) -> np.ndarray:
     """The agent-agent force the crowd parameters ``p`` choose (``interaction``), over unordered neighbour
     ``pairs`` [m, 2], summed per agent."""
     if len(pairs) == 0:
         return np.zeros((len(pos), 2))
-    if p["interaction"] == "moussaid2009":
-        return moussaid2009(pos, vel, pairs, p["moussaid_strength"], p["moussaid_lambda"], p["moussaid_gamma"],
-                            p["moussaid_n"], p["moussaid_n_prime"], walking=walking, direction=direction,
-                            fov_deg=p["fov_deg"], out_of_view=p["out_of_view_weight"])
+    if p.interaction == "moussaid2009":
+        return moussaid2009(pos, vel, pairs, p.moussaid_strength, p.moussaid_lambda, p.moussaid_gamma,
+                            p.moussaid_n, p.moussaid_n_prime, walking=walking, direction=direction,
+                            fov_deg=p.fov_deg, out_of_view=p.out_of_view_weight)
     i = np.concatenate([pairs[:, 0], pairs[:, 1]])
     j = np.concatenate([pairs[:, 1], pairs[:, 0]])
-    return helbing_molnar1995(pos, vel, direction, i, j, p["agent_strength"], p["agent_range"], p["step_time"],
-                              p["fov_deg"], p["out_of_view_weight"])
+    return helbing_molnar1995(pos, vel, direction, i, j, p.agent_strength, p.agent_range, p.step_time,
+                              p.fov_deg, p.out_of_view_weight)
 
 
 def in_view_weight(direction: np.ndarray, force: np.ndarray, fov_deg: float, out_of_view: float) -> np.ndarray:

@@ -35,6 +35,7 @@ from tqdm import tqdm  # noqa: E402
 
 from scenarios import scenario_from_dict  # noqa: E402
 from scenarios.geometry import inside_polygon, pair_vectors  # noqa: E402
+from scenarios.typed import Scenario, plain  # noqa: E402
 
 from .crowd import Crowd  # noqa: E402
 
@@ -66,7 +67,7 @@ def weidmann(rho) -> np.ndarray:
 
 
 def _scenario(name: str, walls: list, waypoints: dict, routes: dict, params: dict | None = None,
-              robot_at: list | None = None) -> dict:
+              robot_at: list | None = None) -> Scenario:
     """A validation scenario: the model's defaults, but no random force (the checks measure the model itself). The
     crowd runs without the robot; the robot the format requires stands in the floor plan, at ``robot_at`` or else
     the first waypoint."""
@@ -325,7 +326,7 @@ def ring_run(density: float, quick: bool = False, seed: int = 0, params: dict | 
     else:
         R, W, segments, warmup, measure = 10.0, 4.0, 128, 20.0, 20.0
     sc, region, area, (lo, hi), r_wp, lookahead, count = _ring_scenario(R, W, segments, W + 0.5, params=params)
-    radius = sc["crowd"]["agent_types"]["adult"]["radius"]
+    radius = sc.crowd.agent_types["adult"].radius
     n = int(round(density * area))
     out = {"density_target": density, "ring_centre_radius_m": R, "ring_width_m": W, "area_m2": area, "agents": n,
            "warmup_s": warmup, "measure_s": measure}
@@ -526,7 +527,7 @@ def free_speeds(agent_type: str, n: int, quick: bool = False, seed: int = 7,
         if s + 1 == int(round(t0 / DT)):
             start = crowd.pos.copy()
     speeds = np.linalg.norm(crowd.pos - start, axis=1) / (t1 - t0)
-    return speeds, {"desired": crowd.v0.copy(), "watch": watch, "params": sc["crowd"]["agent_types"][agent_type]}
+    return speeds, {"desired": crowd.v0.copy(), "watch": watch, "params": sc.crowd.agent_types[agent_type]}
 
 
 def _clipped_normal_moments(mean, std, lo, hi) -> tuple[float, float]:
@@ -545,19 +546,19 @@ def _clipped_normal_moments(mean, std, lo, hi) -> tuple[float, float]:
 def rimea7(quick: bool = False, plot_dir: Path | None = None, seed: int = 7, n: int = 50,
            params: dict | None = None) -> dict:
     """Each agent type's measured free speeds: all within [speed_min, speed_max], the mean near speed_mean."""
-    types = _scenario("rimea7_types", [], {}, {}, params)["crowd"]["agent_types"]
+    types = _scenario("rimea7_types", [], {}, {}, params).crowd.agent_types
     measured_tol = 1e-3  # m/s: the measurement's own error (the relaxation's tail, rounding) is far below this
     per_type, watches, passed, parts = {}, [], True, []
     for k, (name, p) in enumerate(types.items()):
         speeds, extra = free_speeds(name, n, quick, seed + k, params)
         watches.append(extra["watch"])
-        in_range = (speeds >= p["speed_min"] - measured_tol) & (speeds <= p["speed_max"] + measured_tol)
-        tolerance = 3 * p["speed_std"] / np.sqrt(n)  # 3 standard errors of the mean of n draws
+        in_range = (speeds >= p.speed_min - measured_tol) & (speeds <= p.speed_max + measured_tol)
+        tolerance = 3 * p.speed_std / np.sqrt(n)  # 3 standard errors of the mean of n draws
         mean = float(speeds.mean())
-        ok = bool(in_range.all() and abs(mean - p["speed_mean"]) <= tolerance)
+        ok = bool(in_range.all() and abs(mean - p.speed_mean) <= tolerance)
         passed &= ok
-        exp_mean, exp_std = _clipped_normal_moments(p["speed_mean"], p["speed_std"], p["speed_min"], p["speed_max"])
-        per_type[name] = {"n": n, "configured": dict(p), "mean_m_s": mean, "std_m_s": float(speeds.std(ddof=1)),
+        exp_mean, exp_std = _clipped_normal_moments(p.speed_mean, p.speed_std, p.speed_min, p.speed_max)
+        per_type[name] = {"n": n, "configured": plain(p), "mean_m_s": mean, "std_m_s": float(speeds.std(ddof=1)),
                           "min_m_s": float(speeds.min()), "max_m_s": float(speeds.max()),
                           "out_of_range": int((~in_range).sum()), "mean_tolerance_m_s": float(tolerance),
                           "clipped_normal_mean_m_s": exp_mean, "clipped_normal_std_m_s": exp_std,

@@ -23,9 +23,9 @@ import pyarrow.parquet as pq
 
 from evaluation.navigation_report import json_safe
 from pipeline.frames import compose, inverse, rotate, transform_points
+from scenarios.typed import Scenario, as_written
 
 from ..loop import Frame, Simulation
-from ..run import _without_unset
 from .layout import FORMAT_VERSION, FUSED, calibration
 
 ROW_GROUP_FRAMES = 250  # tracking cycles a Parquet row group holds (10 s at 25 Hz)
@@ -213,7 +213,7 @@ class EpisodeWriter:
         self.lasers = [laser.name for laser in sim.lasers]
         self.depth = [c.name for c in sim.depth_cameras]
         self.wall = [c.name for c in sim.wall_cameras]
-        self.types = np.array(list(sim.scenario["crowd"]["agent_types"]), dtype=object)
+        self.types = np.array(list(sim.scenario.crowd.agent_types), dtype=object)
         room = Room(self.out / "sensors.h5")
         room.check_h5({})  # room for the file's structure before HDF5 writes any of it
         self.h5 = h5py.File(self.out / "sensors.h5", "w", track_order=False)
@@ -308,7 +308,7 @@ class EpisodeWriter:
 
     def _write_meta(self) -> None:
         sim = self.sim
-        scenario = _without_unset({k: v for k, v in sim.scenario.items() if k != "source"})
+        scenario = {k: v for k, v in as_written(sim.scenario).items() if k != "source"}
         meta = {"format_version": FORMAT_VERSION, "seed": sim.seed, "frames": self.frames,
                 "frame_stamps": "each frame is a tracking cycle (a laser scan); t in s of simulated time from the "
                                 "crowd's start, warm-up included",
@@ -349,7 +349,7 @@ def _track_columns(frame: Frame) -> dict:
             "world_vx": world_v[:, 0], "world_vy": world_v[:, 1]}
 
 
-def write_episode(scenario: dict, seed: int, duration: float, out: Path, compression: str = "gzip",
+def write_episode(scenario: Scenario, seed: int, duration: float, out: Path, compression: str = "gzip",
                   on_frame=None) -> int:
     """Simulate ``scenario`` at ``seed`` for ``duration`` s (after its warm-up) into the empty directory ``out``;
     return the number of frames. ``on_frame(stamp)`` is called after each frame (progress)."""

@@ -18,7 +18,6 @@ folder is what ``kill -9`` would have left, tidied, and with no complete episode
 
 from __future__ import annotations
 
-import copy
 import errno
 import json
 import os
@@ -33,7 +32,8 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from scenarios.geometry import closest_on_segments, segments_cross, wall_segments
+from scenarios.geometry import closest_on_segments, segments_cross
+from scenarios.typed import Scenario, as_written
 
 from .. import __version__
 from ..outdir import RunDirError, check_out_dir
@@ -48,8 +48,8 @@ ROUTE_CLEARANCE = 0.3  # m beyond the robot's radius a jittered waypoint keeps f
 DISK_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)  # a write refused for space: disk, quota, file size limit
 
 
-def vary(scenario: dict, rng: np.random.Generator, rate: tuple[float, float] | None,
-         density: tuple[float, float] | None, route_jitter: float) -> tuple[dict, dict]:
+def vary(scenario: Scenario, rng: np.random.Generator, rate: tuple[float, float] | None,
+         density: tuple[float, float] | None, route_jitter: float) -> tuple[Scenario, dict]:
     """The episode's scenario and what was drawn: every source's rate times one factor uniform in ``rate``; every
     agent cluster's and standing group's count times one factor uniform in ``density`` (rounded, at least 1); the
     robot's start and route waypoints (its start alone for a robot without ``robot.route``: one driven to goals,
@@ -57,38 +57,37 @@ def vary(scenario: dict, rng: np.random.Generator, rate: tuple[float, float] | N
     was where the move would cross a wall or come within the robot's radius plus ROUTE_CLEARANCE of one. The draws
     are made in that order, each only when asked for, so adding one option leaves the others' draws as they were;
     ``route_offsets`` lists the start's offset first, then each waypoint's."""
-    sc, drawn = copy.deepcopy(scenario), {}
+    sc, drawn = scenario, {}
     if rate is not None:
         f = float(rng.uniform(*rate))
-        for source in sc["sources"]:
-            source["rate"] *= f
+        sc = sc.replace(sources=[source.replace(rate=source.rate * f) for source in sc.sources])
         drawn["rate_scale"] = f
     if density is not None:
         f = float(rng.uniform(*density))
-        for key in ("agents", "standing"):
-            for cluster in sc.get(key) or []:
-                cluster["count"] = max(1, int(round(cluster["count"] * f)))
+        # the standing groups alone, as before: the old loop also read an "agents" key, which the format has not,
+        # so ``clusters`` keep their counts (the docstring's "agent cluster" never was scaled)
+        sc = sc.replace(standing=[group.replace(count=max(1, int(round(group.count * f)))) for group in sc.standing])
         drawn["density_scale"] = f
     if route_jitter > 0:
-        robot = sc["robot"]
-        route = robot.get("route")  # None for a robot driven otherwise (goals, follow, script): its start alone
-        points = np.array([robot["start"][:2], *(route or [])], float).reshape(-1, 2)
+        robot = sc.robot
+        route = robot.route  # None for a robot driven otherwise (goals, follow, script): its start alone
+        points = np.array([robot.start[:2], *(route or [])], float).reshape(-1, 2)
         r = route_jitter * np.sqrt(rng.uniform(size=len(points)))
         a = rng.uniform(0, 2 * np.pi, len(points))
         moved = points + np.column_stack([r * np.cos(a), r * np.sin(a)])
-        walls = wall_segments(sc)
+        walls = sc.map.segments
         if len(walls):
-            clear = closest_on_segments(moved, walls)[1].min(axis=1) > robot["radius"] + ROUTE_CLEARANCE
+            clear = closest_on_segments(moved, walls)[1].min(axis=1) > robot.radius + ROUTE_CLEARANCE
             clear &= ~segments_cross(points, moved, walls)  # never through a wall (out of the map, into a pillar)
             moved = np.where(clear[:, None], moved, points)
-        robot["start"] = [float(moved[0, 0]), float(moved[0, 1]), robot["start"][2]]
-        if route is not None:
-            robot["route"] = moved[1:].tolist()
+        start = [float(moved[0, 0]), float(moved[0, 1]), robot.start[2]]
+        sc = sc.replace(robot=robot.replace(start=start) if route is None
+                        else robot.replace(start=start, route=moved[1:].tolist()))
         drawn["route_offsets"] = (moved - points).tolist()
     return sc, drawn
 
 
-def plan(scenarios: list[dict], episodes: int, seed: int, duration: float | None, rate, density,
+def plan(scenarios: list[Scenario], episodes: int, seed: int, duration: float | None, rate, density,
          route_jitter: float) -> list[dict]:
     """Every episode's id, split, scenario (varied), seed and duration: a pure function of the arguments."""
     out = []
@@ -96,10 +95,10 @@ def plan(scenarios: list[dict], episodes: int, seed: int, duration: float | None
         base = scenarios[k % len(scenarios)]
         sim_seed, rng = episode_seeds(seed, k)
         scenario, drawn = vary(base, rng, rate, density, route_jitter)
-        scenario["seed"] = sim_seed
+        scenario = scenario.replace(seed=sim_seed)
         out.append({"id": episode_id(k), "index": k, "split": split_of(k), "mini": in_mini(k),
-                    "scenario": scenario["name"], "scenario_sha256": scenario_digest(base), "seed": sim_seed,
-                    "variation": drawn, "duration": float(duration if duration is not None else base["duration"]),
+                    "scenario": scenario.name, "scenario_sha256": scenario_digest(base), "seed": sim_seed,
+                    "variation": drawn, "duration": float(duration if duration is not None else base.duration),
                     "spec": scenario})
     return out
 
@@ -328,7 +327,7 @@ def _probe(out: Path) -> None:
 def _check_frames(jobs: list[dict], duration: float | None) -> None:
     """DatasetError for an episode that would hold no frame: a duration under half the scenario's tick."""
     for job in jobs:
-        dt = job["spec"]["dt"]
+        dt = job["spec"].dt
         if int(round(job["duration"] / dt)) < 1:
             what = (f"--duration {duration:g}" if duration is not None
                     else f"{job['scenario']}: duration {job['duration']:g}")
@@ -346,10 +345,8 @@ def _check_variations(planned: list[dict], allow_large: bool, rate, density, rou
         return
     from scenarios import ScenarioError, scenario_from_dict
 
-    from ..run import _without_unset
-
     for job in planned:
-        raw = _without_unset({k: v for k, v in copy.deepcopy(job["spec"]).items() if k != "source"})
+        raw = {k: v for k, v in as_written(job["spec"]).items() if k != "source"}
         try:
             scenario_from_dict(raw, f"{job['scenario']} as {job['id']} varies it", allow_large)
         except ScenarioError as e:
@@ -403,7 +400,7 @@ def _space(reason: str) -> str:
     return f"{reason} (over the file size limit, ulimit -f)" if reason == os.strerror(errno.EFBIG) else reason
 
 
-def generate(scenarios: list[dict], names: list[str], out: Path, episodes: int, seed: int = 0,
+def generate(scenarios: list[Scenario], names: list[str], out: Path, episodes: int, seed: int = 0,
              duration: float | None = None, workers: int = 1, ray_address: str | None = None,
              rate=None, density=None, route_jitter: float = 0.0, compression: str = "gzip",
              progress: bool = True, allow_large: bool = False) -> dict:
@@ -450,8 +447,8 @@ def generate(scenarios: list[dict], names: list[str], out: Path, episodes: int, 
     jobs = [job for job in planned if job["id"] not in done]
     header = {"format_version": FORMAT_VERSION, "crowdsim_version": __version__, "command": command,
               "root_seed": seed, "episodes_planned": episodes}
-    frames_total = sum(round(job["duration"] * job["spec"]["sensors"]["lasers"][0]["rate"])
-                       if job["spec"]["sensors"]["lasers"] else 0 for job in jobs)
+    frames_total = sum(round(job["duration"] * job["spec"].sensors.lasers[0].rate)
+                       if job["spec"].sensors.lasers else 0 for job in jobs)
     episodes_bar = tqdm(total=episodes, initial=len(done), unit="episode", disable=not progress, desc="episodes",
                         position=0)
     frames_bar = tqdm(total=frames_total, unit="frame", disable=not progress, desc="frames", position=1)

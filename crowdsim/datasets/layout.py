@@ -13,6 +13,7 @@ import json
 import numpy as np
 
 from pipeline.frames import optical_rotation
+from scenarios.typed import Scenario, plain
 
 from ..errors import Error
 
@@ -56,10 +57,10 @@ def episode_seeds(root: int, index: int) -> tuple[int, np.random.Generator]:
     return seed, np.random.default_rng(child.spawn(1)[0])
 
 
-def scenario_digest(scenario: dict) -> str:
+def scenario_digest(scenario: Scenario) -> str:
     """sha256 of the scenario as resolved (every default and base file filled in; its source path left out), so
     that a change to a file it builds on shows."""
-    data = {k: v for k, v in scenario.items() if k != "source"}
+    data = {k: v for k, v in plain(scenario).items() if k != "source"}
     return hashlib.sha256(json.dumps(data, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
 
 
@@ -80,13 +81,13 @@ def camera_matrix(width: int, height: int, fovy_deg: float) -> list[list[float]]
     return [[f, 0.0, width / 2], [0.0, f, height / 2], [0.0, 0.0, 1.0]]
 
 
-def calibration(scenario: dict, lasers, depth_cameras, wall_cameras) -> dict:
+def calibration(scenario: Scenario, lasers, depth_cameras, wall_cameras) -> dict:
     """Every sensor's calibration: its parent frame and mount, and for a laser its beam angles and range limits, for a
     camera its intrinsics, image size and units. Transforms are parent_T_sensor: a laser's (x, y, yaw) in base_link
     at its height; a camera's position and the rotation whose columns are its optical axes."""
     out = {"lasers": {}, "depth_cameras": {}, "wall_cameras": {}}
     for laser in lasers:
-        p = laser.p
+        p = plain(laser.p)  # the laser's parameters as plain data (a section, where a sensor keeps one)
         out["lasers"][laser.name] = {
             "parent": "base_link", "x": float(laser.mount[0]), "y": float(laser.mount[1]),
             "yaw": float(laser.mount[2]), "z": float(p["height"]), "n_beams": int(laser.n_beams),
@@ -97,7 +98,7 @@ def calibration(scenario: dict, lasers, depth_cameras, wall_cameras) -> dict:
             "model": {k: v for k, v in p.items() if k not in ("name", "mount")}}
     for kind, cameras, parent in (("depth_cameras", depth_cameras, "base_link"), ("wall_cameras", wall_cameras, "world")):
         for camera in cameras:
-            p, k = camera.p, camera.intrinsics
+            p, k = plain(camera.p), camera.intrinsics
             entry = {"parent": parent, "position": [float(v) for v in p["position"]],
                      "rotation": optical_rotation(p["yaw"], p["pitch"]).tolist(), "optical_axes": "x right, y down, "
                      "z forward", "width": int(k.width), "height": int(k.height), "fovy_deg": float(k.fovy_deg),

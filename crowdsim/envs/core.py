@@ -18,6 +18,7 @@ from pipeline.assemble import build_pipeline
 from pipeline.frames import compose, inverse, transform_points
 from pipeline.software import RobotSoftware
 from scenarios import scenario_from_dict
+from scenarios.typed import plain
 from sensors import Laser, Scene, parts_at
 from sensors.body import body_scale
 from sensors.tag import TagSensor
@@ -86,12 +87,12 @@ class Episodes:
                for key, value in config.scenario_overrides.items()}
         raw = {**ENV_SCENARIO, **raw}
         self.scenario = scenario_from_dict(raw, source="<environment scenario>")
-        self.ticks = int(round(config.control_period / self.scenario["dt"]))
-        if self.ticks < 1 or abs(self.ticks * self.scenario["dt"] - config.control_period) > 1e-9:
-            raise Error(f"control_period: expected a whole number of {self.scenario['dt']} s ticks, "
+        self.ticks = int(round(config.control_period / self.scenario.dt))
+        if self.ticks < 1 or abs(self.ticks * self.scenario.dt - config.control_period) > 1e-9:
+            raise Error(f"control_period: expected a whole number of {self.scenario.dt} s ticks, "
                              f"got {config.control_period}")
-        robot = self.scenario["robot"]
-        self.top_speed = np.array([robot["max_speed"], robot["max_angular_speed"]])  # actions of 1 command these
+        robot = self.scenario.robot
+        self.top_speed = np.array([robot.max_speed, robot.max_angular_speed])  # actions of 1 command these
         self.sensing = "laser" in config.observation or "tracks" in config.observation
         self.observer = Observer(config, self.scenario)
         self.reward = Reward(config.reward, config.task)
@@ -143,16 +144,16 @@ class Episodes:
         self._log(k, None)
 
     def _reset_sensing(self, k: int, rng: np.random.Generator) -> None:
-        laser_p = self.scenario["sensors"]["lasers"][0]
+        laser_p = self.scenario.sensors.lasers[0]
         if len(self.scenes) < self.n:  # made once per world and kept: a MuJoCo model takes milliseconds to make
             w = self.worlds
             for _ in range(self.n):
-                scene = Scene(w.walls, w.robot_radius, max(w.N, 1), parts_at(laser_p["height"]))
+                scene = Scene(w.walls, w.robot_radius, max(w.N, 1), parts_at(laser_p.height))
                 self.scenes.append(scene)
                 self.lasers.append(None)
-                self.software.append(RobotSoftware(build_pipeline(self.scenario["pipeline"], [laser_p["name"]]),
+                self.software.append(RobotSoftware(build_pipeline(plain(self.scenario.pipeline), [laser_p.name]),
                                                    groups=False))
-        self.lasers[k] = Laser(laser_p, self.scenes[k], rng)
+        self.lasers[k] = Laser(plain(laser_p), self.scenes[k], rng)
         self.software[k].reset()
         self._sense(k)
 
@@ -189,7 +190,7 @@ class Episodes:
         rewards, terminated, truncated [E] and one info per episode."""
         w = self.worlds
         command = np.minimum(np.maximum(np.asarray(actions, float).reshape(self.n, 2), -1.0), 1.0) * self.top_speed
-        draws = np.stack([g.normal(0.0, w.crowd_p["random_force"], (self.ticks, 2, w.N)) for g in self.noise_rng], 2)
+        draws = np.stack([g.normal(0.0, w.crowd_p.random_force, (self.ticks, 2, w.N)) for g in self.noise_rng], 2)
         noise = draws[:, 0] + 1j * draws[:, 1]  # [ticks, E, N]
         gap = np.full(self.n, np.inf)
         at_collision = {}  # episode -> its state at the tick of its first collision, for the log
@@ -246,7 +247,7 @@ class Episodes:
         target = transform_points(inverse(self.start[k]), np.array([[w.x[k, 0], w.y[k, 0]]]))[0]
         d = np.hypot(*(tracks.position - target).T)
         best = int(np.argmin(d))
-        threshold = self.scenario["evaluation"]["threshold"]
+        threshold = self.scenario.evaluation.threshold
         return (int(tracks.track_id[best]) if d[best] <= threshold else -1), visible
 
     def episode_metrics(self, k: int) -> dict:

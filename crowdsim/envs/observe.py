@@ -23,6 +23,7 @@ from gymnasium import spaces
 
 from pipeline.frames import inverse, rotate, rotate_covariances, rotation, transform_points
 from pipeline.types import UNKNOWN_VARIANCE
+from scenarios.typed import Scenario
 from sensors.tag import TAG_DEFAULTS
 
 MAX_SPEED = 5.0  # m/s: observed person and track speeds are clipped to this per axis (people walk below 2.6)
@@ -35,14 +36,14 @@ def _box(low, high, shape) -> spaces.Box:
 
 
 class Observer:
-    def __init__(self, config, scenario: dict):
+    def __init__(self, config, scenario: Scenario):
         self.config = config
-        robot, laser = scenario["robot"], scenario["sensors"]["lasers"][0]
+        robot, laser = scenario.robot, scenario.sensors.lasers[0]
         K, D = config.k_nearest, ROOM_DIAGONAL
-        self.range_max = laser["range_max"]
+        self.range_max = laser.range_max
         self.follow = config.task == "follow"
-        parts = {"velocity": _box([-robot["max_speed"], -robot["max_angular_speed"]],
-                                  [robot["max_speed"], robot["max_angular_speed"]], (2,))}
+        parts = {"velocity": _box([-robot.max_speed, -robot.max_angular_speed],
+                                  [robot.max_speed, robot.max_angular_speed], (2,))}
         if self.follow:
             parts["tag"] = _box([0.0, -np.pi, 0.0], [TAG_DEFAULTS["range_max"], np.pi, 1.0], (3,))
         else:
@@ -53,7 +54,7 @@ class Observer:
             if self.follow:
                 parts["target"] = _box([-D, -D, -MAX_SPEED, -MAX_SPEED], [D, D, MAX_SPEED, MAX_SPEED], (4,))
         if "laser" in config.observation:
-            n = int(round(laser["fov_deg"] / laser["resolution_deg"])) + (0 if laser["fov_deg"] >= 360 else 1)
+            n = int(round(laser.fov_deg / laser.resolution_deg)) + (0 if laser.fov_deg >= 360 else 1)
             parts["laser"] = _box(0.0, self.range_max, (n,))
         if "tracks" in config.observation:
             V = UNKNOWN_VARIANCE

@@ -21,6 +21,7 @@ from crowdsim.crowd import forces
 from crowdsim.crowd.behaviours import AgentTypes
 from crowdsim.robot import arc, limited
 from pipeline.frames import compose
+from scenarios.typed import Scenario
 
 from ..errors import Error
 from .layouts import LAYOUTS, Layout, room_walls
@@ -33,19 +34,19 @@ class Worlds:
     numbers x + iy (one array call per vector operation: at these sizes the calls are the cost); robot arrays
     [E, ...]."""
 
-    def __init__(self, n_worlds: int, people: int, layout: str, scenario: dict, robot_visible: bool = True):
+    def __init__(self, n_worlds: int, people: int, layout: str, scenario: Scenario, robot_visible: bool = True):
         if layout not in LAYOUTS:
             raise Error(f"scenario: expected one of {sorted(LAYOUTS)}, got {layout!r}")
         if people < 0:
             raise Error(f"people: expected a count >= 0, got {people}")
         self.E, self.N = n_worlds, people
         self.layout = LAYOUTS[layout]
-        self.crowd_p = scenario["crowd"]
-        self.robot_p = scenario["robot"]
-        self.robot_radius = self.robot_p["radius"]
+        self.crowd_p = scenario.crowd
+        self.robot_p = scenario.robot
+        self.robot_radius = self.robot_p.radius
         self.robot_visible = robot_visible
-        self.dt = scenario["dt"]
-        self.types = AgentTypes(self.crowd_p["agent_types"])
+        self.dt = scenario.dt
+        self.types = AgentTypes(self.crowd_p.agent_types)
         self.kind = self.types.names.index("adult") if "adult" in self.types.names else 0
         shape = (n_worlds, people)
         self.z, self.v, self.goal_z = (np.zeros(shape, complex) for _ in range(3))  # goal_z: the place headed for
@@ -119,10 +120,10 @@ class Worlds:
         z, v, v0 = self.z, self.v, self.v0
         e = self.goal_z - z
         e /= np.maximum(np.abs(e), 1e-9)
-        acc = (v0 * e - v) / p["relaxation_time"]
-        acc += forces.moussaid2009_dense(z, v, e, p["moussaid_strength"], p["moussaid_lambda"], p["moussaid_gamma"],
-                                         p["moussaid_n"], p["moussaid_n_prime"], p["fov_deg"],
-                                         p["out_of_view_weight"])
+        acc = (v0 * e - v) / p.relaxation_time
+        acc += forces.moussaid2009_dense(z, v, e, p.moussaid_strength, p.moussaid_lambda, p.moussaid_gamma,
+                                         p.moussaid_n, p.moussaid_n_prime, p.fov_deg,
+                                         p.out_of_view_weight)
         acc += self._wall_force(e)
         robot = (self.robot_pose[:, 0] + 1j * self.robot_pose[:, 1])[:, None]
         if self.robot_visible:
@@ -131,7 +132,7 @@ class Worlds:
         nv = v + acc * dt
         back = np.minimum((nv * e.conjugate()).real, 0.0)  # pressure stops a walker; it does not walk them backwards
         nv -= back * e
-        nv *= np.minimum(1.0, p["max_speed_factor"] * v0 / np.maximum(np.abs(nv), 1e-9))
+        nv *= np.minimum(1.0, p.max_speed_factor * v0 / np.maximum(np.abs(nv), 1e-9))
         nz = z + nv * dt
         gap = np.minimum(gap, (np.abs(nz - robot) - self.radius - self.robot_radius).min(axis=1))
         nz = self._contacts(nz)
@@ -147,16 +148,16 @@ class Worlds:
     def _in_view(self, e, f) -> np.ndarray:
         """``forces.in_view_weight`` on complex vectors."""
         p = self.crowd_p
-        seen = -(e.conjugate() * f).real >= np.abs(f) * np.cos(np.radians(p["fov_deg"]) / 2)
-        return np.where(seen, 1.0, p["out_of_view_weight"])
+        seen = -(e.conjugate() * f).real >= np.abs(f) * np.cos(np.radians(p.fov_deg) / 2)
+        return np.where(seen, 1.0, p.out_of_view_weight)
 
     def _robot_force(self, e, robot) -> np.ndarray:
         """``forces.obstacle_disc_force`` from each world's robot (at ``robot`` [E, 1]) on its persons."""
         p = self.crowd_p
         away = self.z - robot
         dist = np.maximum(np.abs(away), 1e-9)
-        f = away * (p["robot_strength"] / p["robot_range"] * np.exp(
-            -np.maximum(dist - self.robot_radius, 0.0) / p["robot_range"]) / dist)
+        f = away * (p.robot_strength / p.robot_range * np.exp(
+            -np.maximum(dist - self.robot_radius, 0.0) / p.robot_range) / dist)
         return f * self._in_view(e, f)
 
     def _wall_force(self, e) -> np.ndarray:
@@ -172,10 +173,10 @@ class Worlds:
         facing[0], facing[2] = e.real, e.imag
         np.negative(facing[0], out=facing[1])
         np.negative(facing[2], out=facing[3])
-        facing = facing <= -np.cos(np.radians(p["fov_deg"]) / 2)  # the force (away from the wall) against e
-        mag = np.exp((self.radius - dist) / p["wall_range"])
-        mag *= np.where(facing, p["wall_strength"], p["wall_strength"] * p["out_of_view_weight"])
-        mag *= dist < p["wall_interaction_range"]
+        facing = facing <= -np.cos(np.radians(p.fov_deg) / 2)  # the force (away from the wall) against e
+        mag = np.exp((self.radius - dist) / p.wall_range)
+        mag *= np.where(facing, p.wall_strength, p.wall_strength * p.out_of_view_weight)
+        mag *= dist < p.wall_interaction_range
         return (mag[0] - mag[1]) + 1j * (mag[2] - mag[3])
 
     def _contacts(self, z) -> np.ndarray:

@@ -20,6 +20,7 @@ from evaluation.clearmot import ClearMot
 from pipeline.assemble import build_pipeline
 from pipeline.fusion import to_frame
 from pipeline.types import DetectedPersons, LaserScan
+from scenarios.typed import Scenario, Section, plain
 
 
 @dataclass(frozen=True)
@@ -35,7 +36,7 @@ class Cycle:
     gt_speed: np.ndarray  # m/s
 
 
-def record(scenario: dict, seed: int, duration: float | None = None) -> list[Cycle]:
+def record(scenario: Scenario, seed: int, duration: float | None = None) -> list[Cycle]:
     """``duration`` seconds (None: the scenario's) of ``scenario`` (a loaded scenario driving its route) from
     ``seed``, after its warm-up."""
     from crowdsim.loop import Simulation
@@ -48,7 +49,7 @@ def record(scenario: dict, seed: int, duration: float | None = None) -> list[Cyc
     sim.reset(seed)
     sim.warm_up()
     cycles = []
-    for f in sim.frames(scenario["duration"] if duration is None else duration):
+    for f in sim.frames(scenario.duration if duration is None else duration):
         gt = f.groundtruth
         cycles.append(Cycle(f.stamp, [(scan, lasers[scan.frame].pose_in(sim.robot.odom_pose)) for scan in f.scans],
                             f.world_T_odom, gt.track_id, gt.position, f.gt_tags.ignore,
@@ -56,11 +57,11 @@ def record(scenario: dict, seed: int, duration: float | None = None) -> list[Cyc
     return cycles
 
 
-def detect(cycles: list[Cycle], pipeline_spec: dict, floor_plan: dict) -> list[DetectedPersons]:
+def detect(cycles: list[Cycle], pipeline_spec: Section | dict, floor_plan: Section) -> list[DetectedPersons]:
     """The fused detections of each cycle from a validated ``pipeline`` section's detectors, map filter and fusion
-    (on the scenario's ``map``, ``floor_plan``)."""
+    (on the scenario's ``map``, ``floor_plan``); the pipeline is built from plain data, as the robot's software is."""
     lasers = sorted({scan.frame for c in cycles for scan, _ in c.scans})
-    pipeline = build_pipeline(pipeline_spec, lasers, floor_plan)
+    pipeline = build_pipeline(plain(pipeline_spec), lasers, plain(floor_plan))
     out = []
     for c in cycles:
         batches = {}

@@ -22,6 +22,7 @@ from pipeline.groups.relations import (INDICATORS, MODEL_FILES, MODELS_DIR, Plat
                                        monomial_powers, monomials, save_model, tabulate)
 from pipeline.types import TrackedPersons
 from scenarios import load_scenario
+from scenarios.typed import Scenario
 
 from .seeds import map_seeds
 
@@ -57,12 +58,12 @@ class GroupCycle:
                           self.queued)
 
 
-def airport() -> dict:
+def airport() -> Scenario:
     """The bundled airport with SPENCER's relation model (the data do not depend on it, and retraining does not
     need the shipped models)."""
     scenario = load_scenario(SCENARIO)
-    scenario["pipeline"]["groups"]["model"] = "spencer"
-    return scenario
+    pipeline = scenario.pipeline
+    return scenario.replace(pipeline=pipeline.replace(groups=pipeline.groups.replace(model="spencer")))
 
 
 def collect(seed: int, duration: float = DURATION) -> list[GroupCycle]:
@@ -73,7 +74,7 @@ def collect(seed: int, duration: float = DURATION) -> list[GroupCycle]:
     sim = Simulation(airport())
     sim.reset(seed)
     sim.warm_up()
-    score = CycleScorer(sim.scenario["evaluation"]["threshold"])
+    score = CycleScorer(sim.scenario.evaluation.threshold)
     out = []
     for f in sim.frames(duration):
         gt = f.groundtruth.select(~f.gt_tags.ignore)

@@ -100,12 +100,13 @@ def record(name: str, seed: int | None = None) -> list[RecordedFrame]:
     from scenarios import load_scenario
 
     scenario = load_scenario(name)
-    scenario["pipeline"]["tracker"] = {"type": "nnt"}  # the filter runs on the recording, in every mode
+    # the filter runs on the recording, in every mode
+    scenario = scenario.replace(pipeline=scenario.pipeline.replace(tracker={"type": "nnt"}))
     sim = Simulation(scenario)
-    sim.reset(scenario["seed"] if seed is None else seed)
+    sim.reset(scenario.seed if seed is None else seed)
     sim.warm_up()
     frames = []
-    for f in sim.frames(scenario["duration"] + LEAD_IN):
+    for f in sim.frames(scenario.duration + LEAD_IN):
         if f.stamp > LEAD_IN + 1e-9:
             frames.append(RecordedFrame(f.stamp, f.detector_outputs, views(f.camera_frames),
                                         f.groundtruth.track_id, f.groundtruth.position))

@@ -33,6 +33,7 @@ from pipeline.detectors.rgbd import RgbdPeopleDetector, person_box
 from pipeline.fusion import to_frame
 from pipeline.tracking.rgbd_tracker import RgbdTracker
 from pipeline.types import DepthFrame
+from scenarios.typed import Scenario
 
 from .seeds import map_seeds
 from .train_hog_robot import recording, truth_boxes
@@ -81,7 +82,7 @@ class Recorded:
     gt_xy: np.ndarray
 
 
-def scenario(situation: str, motion: str, preset: str = "kinect_160") -> dict:
+def scenario(situation: str, motion: str, preset: str = "kinect_160") -> Scenario:
     from scenarios import scenario_from_dict
     from scenarios.loader import read_raw, resolve
 
@@ -98,7 +99,7 @@ def record(situation: str, motion: str, seed: int, preset: str = "kinect_160") -
     sim = Simulation(scenario(situation, motion, preset))
     sim.reset(seed)
     out = []
-    for frame in sim.frames(sim.scenario["duration"]):
+    for frame in sim.frames(sim.scenario.duration):
         for image in frame.depth_frames:
             gt = frame.groundtruth
             rows = np.searchsorted(gt.track_id, image.ids)

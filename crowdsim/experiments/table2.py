@@ -22,6 +22,7 @@ import numpy as np
 
 from pipeline.assemble import TRACKERS, build_part
 from scenarios import load_scenario
+from scenarios.typed import Scenario, plain
 from scenarios.format import DETECTOR as DETECTOR_SPEC
 from scenarios.format import TRACKER
 from scenarios.schema import validate
@@ -55,9 +56,9 @@ ROWS = [
 COLUMNS = ("mota", "ids", "fp", "miss", "hz")
 
 
-def seed000_pipeline(scenario: dict) -> dict:
+def seed000_pipeline(scenario: Scenario) -> dict:
     """The airport's pipeline section with seed 000's detector in place of its own."""
-    return {**scenario["pipeline"], "detector": validate(DETECTOR, DETECTOR_SPEC, "<table2>", "pipeline.detector")}
+    return {**plain(scenario.pipeline), "detector": validate(DETECTOR, DETECTOR_SPEC, "<table2>", "pipeline.detector")}
 
 
 def replay(cycles: list[Cycle], detections: list, spec: dict) -> dict:
@@ -72,7 +73,7 @@ def replay(cycles: list[Cycle], detections: list, spec: dict) -> dict:
 def _one_seed(seed: int, duration: float | None) -> list[dict]:
     scenario = load_scenario(SCENARIO)
     cycles = record(scenario, seed, duration)
-    detections = detect(cycles, seed000_pipeline(scenario), scenario["map"])
+    detections = detect(cycles, seed000_pipeline(scenario), scenario.map)
     return [replay(cycles, detections, spec) for _, spec, _ in ROWS]
 
 

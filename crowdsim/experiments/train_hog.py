@@ -34,6 +34,7 @@ from pipeline.detectors.hog import (MODEL_FILE, MODEL_FORMAT, MODELS_DIR, PERSON
 from pipeline.detectors.wall_camera import HOG_SCALES
 from scenarios import scenario_from_dict
 from scenarios.loader import read_raw, resolve
+from scenarios.typed import Scenario
 
 from .seeds import map_seeds
 
@@ -47,7 +48,7 @@ SVM_C = 0.01
 SCALES = np.array(HOG_SCALES)  # the detector's: negatives, hard negatives and the threshold at the scales it searches
 
 
-def stream_scenario() -> dict:
+def stream_scenario() -> Scenario:
     """The room with walkers streaming across it (module docstring)."""
     raw = read_raw(resolve(SCENARIO))
     raw.pop("clusters")

@@ -32,6 +32,7 @@ from pipeline.detectors.hog import HogModel, box_iou, integral, orientation_vote
 from pipeline.detectors.rgbd import RgbdPeopleDetector, person_box
 from scenarios import scenario_from_dict
 from scenarios.loader import read_raw, resolve
+from scenarios.typed import Scenario
 
 from .seeds import map_seeds
 from .train_hog import fit
@@ -45,7 +46,7 @@ NEGATIVES, HARD_POOL = 20, 200
 RECALL, START_RECALL = 0.97, 0.9
 
 
-def stream_scenario() -> dict:
+def stream_scenario() -> Scenario:
     """The KTP room with walkers crossing it along and across the camera's view (module docstring)."""
     raw = read_raw(resolve(SCENARIO))
     for key in ("clusters", "sources", "standing"):

@@ -22,6 +22,7 @@ from pipeline.assemble import TRACKERS, build_part
 from scenarios import load_scenario
 from scenarios.format import PIPELINE
 from scenarios.schema import validate
+from scenarios.typed import plain, typed
 
 from .recorded import detect, record, track
 
@@ -80,12 +81,13 @@ class Recorded:
 
     def mota(self, pipeline: dict | None) -> float:
         """Mean MOTA (%) over the recorded seeds of ``pipeline`` (None: the airport's own)."""
-        spec = self.scenario["pipeline"] if pipeline is None else validate(pipeline, PIPELINE, "<tune>", "pipeline")
-        threshold = self.scenario["evaluation"]["threshold"]
+        spec = (self.scenario.pipeline if pipeline is None
+                else typed(validate(pipeline, PIPELINE, "<tune>", "pipeline"), PIPELINE))
+        threshold = self.scenario.evaluation.threshold
         scores = []
         for cycles in self.runs:
-            detections = detect(cycles, spec, self.scenario["map"])
-            tracker = build_part(spec["tracker"], TRACKERS)
+            detections = detect(cycles, spec, self.scenario.map)
+            tracker = build_part(plain(spec.tracker), TRACKERS)
             scores.append(100 * track(cycles, detections, tracker, threshold)[0]["all"].mota)
         return float(np.mean(scores))
 
