@@ -105,9 +105,9 @@ class Simulation:
                                    plain(sensors.wall_cameras))
                              if sensors.depth_cameras or sensors.wall_cameras else None)
         # cameras hold GL contexts, and a user's parts may be costly to make: made once, started over at each reset
-        self.depth_cameras = [DepthCamera(plain(p), self.camera_scene, np.random.default_rng(0))
+        self.depth_cameras = [DepthCamera(scene=self.camera_scene, rng=np.random.default_rng(0), **p.params)
                               for p in sensors.depth_cameras]
-        self.wall_cameras = [WallCamera(plain(p), self.camera_scene) for p in sensors.wall_cameras]
+        self.wall_cameras = [WallCamera(scene=self.camera_scene, **p.params) for p in sensors.wall_cameras]
         self.custom_sensors = [_user_sensor(spec, source, k) for k, spec in enumerate(sensors.custom or ())]
         self.software = RobotSoftware(build_pipeline(scenario.pipeline, [p.name for p in sensors.lasers],
                                                      scenario.map, source))
@@ -138,11 +138,11 @@ class Simulation:
         rng = dict(zip(names, (np.random.default_rng(s) for s in np.random.SeedSequence(self.seed).spawn(len(names)))))
         follow = scenario.robot.follow.target if scenario.robot.driver == "follow" else None
         self.world = World(scenario, self.walls, rng["crowd"], rng["robot"], follow)
-        self.lasers = [Laser(plain(p), self.scene, rng[f"laser:{p.name}"]) for p in scenario.sensors.lasers]
+        self.lasers = [Laser(scene=self.scene, rng=rng[f"laser:{p.name}"], **p.params) for p in scenario.sensors.lasers]
         self.laser_array = LaserArray(self.lasers, self.scene)  # all lasers due at a tick in one ray call
         for camera in self.depth_cameras:
             camera.rng = rng[f"depth_camera:{camera.name}"]
-        self.tag = TagSensor(plain(scenario.sensors.tag), rng["tag"]) if follow is not None else None
+        self.tag = TagSensor(rng=rng["tag"], **scenario.sensors.tag.params) if follow is not None else None
         # the capture order (cameras, then the lasers in one batched call) fixes the order in which detections
         # reach the fusion, and with them the fused detections' ids
         self.sensors = [*self.depth_cameras, *self.wall_cameras, *self.lasers, *self.custom_sensors,

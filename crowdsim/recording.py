@@ -37,7 +37,7 @@ class Recording:
         self.lasers = sim.lasers
         self.radius = sim.robot.p.radius
         # the depth cameras' mounts on base_link as 2D poses (x, y, yaw)
-        self.depth_mounts = np.array([[*c.p["position"][:2], c.p["yaw"]] for c in sim.depth_cameras]).reshape(-1, 3)
+        self.depth_mounts = np.array([[*c.position[:2], c.yaw] for c in sim.depth_cameras]).reshape(-1, 3)
         self.sensor_names = [laser.name for laser in sim.lasers] + [c.name for c in sim.depth_cameras]
         self.rec.log("world/walls", rr.LineStrips2D(list(walls), colors=[90, 90, 100]), static=True)
         for camera in (*sim.depth_cameras, *sim.wall_cameras):
@@ -47,7 +47,7 @@ class Recording:
             self.rec.log(f"cameras/{camera.name}", rr.Pinhole(focal_length=float(k.f), width=k.width, height=k.height,
                                                              camera_xyz=rr.ViewCoordinates.RDF), static=True)
         if sim.wall_cameras:
-            poses = np.array([[*c.p["position"][:2], c.p["yaw"]] for c in sim.wall_cameras])
+            poses = np.array([[*c.position[:2], c.yaw] for c in sim.wall_cameras])
             self.rec.log("world/wall_cameras", rr.Arrows2D(**_axes(poses, 1.0), colors=[0, 160, 160],
                                                            labels=[c.name for c in sim.wall_cameras]), static=True)
 

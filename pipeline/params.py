@@ -14,22 +14,31 @@ import dataclasses
 import importlib
 from typing import Any, NamedTuple
 
-__all__ = ["param", "ordered", "Slot", "made"]
+__all__ = ["param", "REQUIRED", "declared", "ordered", "Slot", "made"]
+
+REQUIRED = dataclasses.MISSING  # the default of a parameter that must be given (its ``kind`` named)
 
 
 def param(default: Any, doc: str, *, kind: str | None = None, min: float | None = None, max: float | None = None,
-          exclusive_min: bool = False, choices: tuple | None = None, item: dict | None = None,
+          exclusive_min: bool = False, choices: tuple | None = None, item: dict | type | None = None,
           parts: Slot | None = None, min_items: int = 0) -> Any:
     """A dataclass field that is a parameter of its part: ``doc`` gives its unit and the seed section (or the
     measurement) its default comes from; its kind is its default's (int, float, str, bool, or a list: of ``item``,
     keyword arguments of ``param`` without the default and doc, or of parts of the ``parts`` slot; or a mapping of
     names to ``item``s), or ``kind`` where the default does not tell it: a default None (the parameter may be left
-    out) or a point (``point3``)."""
+    out) or a point (``point3``), or one without a default (``REQUIRED``); a list's ``item`` may be a class whose
+    declared parameters are each item's keys."""
     limits = dict(doc=doc, kind=kind, min=min, max=max, exclusive_min=exclusive_min, choices=choices, item=item,
                   parts=parts, min_items=min_items)
     if isinstance(default, (list, dict)):
         return dataclasses.field(default_factory=lambda: copy.deepcopy(default), metadata={"param": limits})
     return dataclasses.field(default=default, metadata={"param": limits})
+
+
+def declared(part: Any) -> dict[str, Any]:
+    """A part's declared parameters and their values, in their order (what it records of itself: a dataset's
+    calibration)."""
+    return {f.name: getattr(part, f.name) for f in dataclasses.fields(part) if "param" in f.metadata}
 
 
 def ordered(low: str, high: str, strict: bool = False):

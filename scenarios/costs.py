@@ -23,6 +23,8 @@ import re
 
 import numpy as np
 
+from sensors.laser import beam_count
+
 from .geometry import wall_segments
 from .schema import ScenarioError
 
@@ -112,14 +114,9 @@ def _n(x: float) -> str:
 # -- the figures ----------------------------------------------------------------------------------------------------
 
 def laser_beams(laser: dict) -> float:
-    """The beams of one scan, counted as sensors/laser.py counts them (a float: huge counts stay finite or inf)."""
-    fov, res = np.radians(laser["fov_deg"]), np.radians(laser["resolution_deg"])
-    with np.errstate(over="ignore", divide="ignore"):
-        ratio = float(fov / res) if res > 0 else math.inf
-    full_circle = laser["fov_deg"] >= 360.0
-    if not math.isfinite(ratio) or ratio > 1e15:
-        return ratio
-    return float(int(round(ratio)) + (0 if full_circle else 1))
+    """The beams of one scan, as the laser counts them (sensors.laser.beam_count; a float: huge counts stay finite
+    or inf)."""
+    return float(beam_count(laser["fov_deg"], laser["resolution_deg"]))
 
 
 def _grid_ends(map_: dict, map_filter: dict) -> tuple[np.ndarray, np.ndarray]:

@@ -12,13 +12,14 @@ from pipeline.fusion import FUSIONS
 from pipeline.groups import GROUP_STAGES
 from pipeline.map_filter import MapFilter
 from pipeline.navigation.planners import PLANNERS
-from pipeline.params import ordered as _ordered
 from pipeline.tracking.mht import MHTParams
 from pipeline.tracking.nnt import NearestNeighbourTracker
 from pipeline.tracking.rgbd_tracker import RgbdTracker
 from pipeline.tracking.rjmcmc import RjmcmcTracker
+from sensors.camera import DepthCamera, WallCamera
+from sensors.laser import Laser
+from sensors.tag import TagSensor
 
-from .costs import laser_beams
 from .laser_presets import LASER_PRESETS
 from .schema import Field, ListOf, MapOf, Schema, ScenarioError, Typed, schema_of, slot_field, validate
 
@@ -34,14 +35,6 @@ def _extent(key: str):
         if min(p[key]) < 0:
             return key, f"{p[key]}; expected a width and height of at least 0 m"
     return check
-
-
-def _two_beams(p: dict):
-    """The laser's beams as sensors/laser.py counts them (scenarios.costs.laser_beams)."""
-    beams = laser_beams(p)
-    if beams < 2:
-        return "resolution_deg", (f"{p['resolution_deg']:g} deg over fov_deg {p['fov_deg']:g} gives {beams:.0f} beam; "
-                                  "expected at least 2 beams (a finer resolution or a wider field of view)")
 
 
 AGENT_TYPE = Schema({
@@ -189,15 +182,8 @@ FOLLOW = Schema({
 })
 
 # seed 001 Sec. 3.2: the RFID reader's coverage; the errors, detection rate and read rate are assumptions
-# (sensors/tag.py says why); a test keeps these equal to sensors.tag.TAG_DEFAULTS
-TAG = Schema({
-    "rate": F("float", 5.0, min=0.0, exclusive_min=True, doc="Hz, readings per second (an assumption)"),
-    "range_min": F("float", 0.5, min=0.0, doc="m, nearest tag read (seed 001 Sec. 3.2)"),
-    "range_max": F("float", 4.5, min=0.0, exclusive_min=True, doc="m, farthest tag read (seed 001 Sec. 3.2)"),
-    "range_sd": F("float", 0.5, min=0.0, doc="m, range error sd (an assumption: coarse)"),
-    "bearing_sd_deg": F("float", 20.0, min=0.0, doc="deg, bearing error sd (an assumption: one antenna lobe)"),
-    "detection_probability": F("float", 0.9, min=0.0, max=1.0, doc="chance a due reading is had (an assumption)"),
-}, checks=(_ordered("range_min", "range_max", strict=True),))
+# (sensors/tag.py declares them and says why)
+TAG = schema_of(TagSensor)
 
 ROBOT = Schema({
     "start": F("pose", required=True, doc="m, m, rad: initial pose in the world frame"),
@@ -228,34 +214,9 @@ ROBOT = Schema({
     "follow": F(FOLLOW, optional=True, doc="the follow driver's target and band (required with driver: follow)"),
 })
 
-NOISE_BAND = Schema({
-    "up_to": F("float", required=True, min=0.0, exclusive_min=True, doc="m, the band covers ranges up to this"),
-    "systematic": F("float", 0.0, min=0.0,
-                    doc="m, +- bound of the laser's offset (drawn uniformly once per laser, the same on every beam)"),
-    "statistical": F("float", 0.0, min=0.0, doc="m, 1-sigma Gaussian noise drawn anew for every return"),
-})
+# the sensors declare their parameters on their classes (where each default comes from is said there)
+LASER = schema_of(Laser, LASER_PRESETS)
 
-LASER = Schema({
-    "name": F("str", required=True, doc="the laser's frame name"),
-    "preset": F("str", None, choices=tuple(LASER_PRESETS),
-                doc="a datasheet model whose values fill the keys not given (scenarios/laser_presets.py)"),
-    "mount": F("pose", required=True, doc="m, m, rad: pose in base_link"),
-    "height": F("float", 0.70, min=0.0, doc="m above the floor (seed 000: two lasers at 70 cm)"),
-    "fov_deg": F("float", 190.0, min=0.0, exclusive_min=True, max=360.0, doc="deg (SICK LMS500)"),
-    "resolution_deg": F("float", 0.5, min=0.0, exclusive_min=True, doc="deg between beams (SICK LMS500)"),
-    "range_min": F("float", 0.0, min=0.0, doc="m, nearer returns are no-returns"),
-    "range_max": F("float", 20.0, min=0.0, exclusive_min=True, doc="m (seed 000: detections up to 20 m)"),
-    "rate": F("float", 25.0, min=0.0, exclusive_min=True,
-              doc="Hz (SICK LMS500: 25 or 50 Hz), at most the simulation's steps per second (1 / dt)"),
-    "noise": F(ListOf(F(NOISE_BAND)), LASER_PRESETS["sick_lms500"]["noise"],
-               doc="range error bands, nearest first; beyond the last, the last applies (SICK LMS5xx HR)"),
-    "no_return": F("str", "nan", choices=("nan", "range_max"),
-                   doc="what a beam without a return reads: NaN, or range_max as many drivers report"),
-}, presets=LASER_PRESETS, checks=(_two_beams,))
-
-# Kinect-like RGB-D cameras (Microsoft Kinect / Asus Xtion: 640 x 480 at up to 30 Hz, 43 degrees vertical field of
-# view, about 0.5-8 m; Khoshelham & Elberink 2012); the 160 x 120 variant is the same camera at a quarter resolution.
-# The rate is the scenario's to choose (15 Hz unless given): 30 Hz would need a simulation step of 1/30 s or less
 DEPTH_CAMERA_PRESETS = {
     "kinect_640": {"width": 640, "height": 480, "fovy_deg": 43.0, "range_min": 0.5, "range_max": 8.0,
                    "noise": "kinect"},
@@ -263,43 +224,8 @@ DEPTH_CAMERA_PRESETS = {
                    "noise": "kinect"},
 }
 
-DEPTH_CAMERA = Schema({
-    "name": F("str", required=True, doc="the camera's optical frame name"),
-    "preset": F("str", None, choices=tuple(DEPTH_CAMERA_PRESETS),
-                doc="a camera model whose values fill the keys not given"),
-    "position": F("point3", [0.45, 0.0, 1.45],
-                  doc="m, in base_link (SPENCER: RGB-D cameras at head height, front and rear)"),
-    "yaw": F("float", 0.0, doc="rad, viewing direction in base_link (pi: looking backwards)"),
-    "pitch": F("float", 0.0, min=-1.57, max=1.57, doc="rad, tilt down (positive) or up"),
-    "width": F("int", 160, min=8, max=4096, doc="pixels"),
-    "height": F("int", 120, min=8, max=4096, doc="pixels"),
-    "fovy_deg": F("float", 43.0, min=1.0, max=170.0, doc="deg, vertical field of view (Kinect: 43)"),
-    "range_min": F("float", 0.5, min=0.0, doc="m, nearer depths read NaN (Kinect: 0.5)"),
-    "range_max": F("float", 8.0, min=0.0, exclusive_min=True, doc="m, farther depths read NaN (Kinect: ~8)"),
-    "rate": F("float", 15.0, min=0.0, exclusive_min=True, doc="Hz, at most 1 / dt"),
-    "noise": F("str", "kinect", choices=("kinect", "none"),
-               doc="kinect: Gaussian depth noise, then depth quantized through the disparity (the keys below)"),
-    "noise_sigma": F("float", 1.425e-3, min=0.0,
-                     doc="1/m, the noise's sigma per z^2 (Khoshelham & Elberink 2012: 1.425e-3)"),
-    "ir_focal_px": F("float", 580.0, min=0.0, exclusive_min=True,
-                     doc="px, focal length of the IR camera the disparity is measured in (Kinect: 580)"),
-    "ir_baseline": F("float", 0.075, min=0.0, exclusive_min=True,
-                     doc="m, IR projector to IR camera (Kinect: 0.075)"),
-    "disparity_subpixel": F("int", 8, min=1, doc="disparity steps per pixel (Kinect: 8, a 1/8-pixel step)"),
-    "rgb": F("bool", False, doc="render a colour image too (a second pass)"),
-}, presets=DEPTH_CAMERA_PRESETS)
-
-WALL_CAMERA = Schema({
-    "name": F("str", required=True, doc="the camera's frame name"),
-    "position": F("point3", required=True, doc="m, in the world"),
-    "yaw": F("float", 0.0, doc="rad, viewing direction in the world"),
-    "pitch": F("float", 0.5, min=-1.57, max=1.57, doc="rad, tilt down (positive)"),
-    "width": F("int", 320, min=8, max=4096, doc="pixels (seed 001: flea2 cameras, up to 640 x 480)"),
-    "height": F("int", 240, min=8, max=4096, doc="pixels"),
-    "fovy_deg": F("float", 45.0, min=1.0, max=170.0, doc="deg, vertical field of view"),
-    "rate": F("float", 10.0, min=0.0, exclusive_min=True, doc="Hz, at most 1 / dt"),
-    "rgb": F("bool", True, doc="render a colour image (the segmentation and boxes come without it)"),
-})
+DEPTH_CAMERA = schema_of(DepthCamera, DEPTH_CAMERA_PRESETS)
+WALL_CAMERA = schema_of(WallCamera)
 
 # The pipeline's parts (pipeline/assemble.py builds them): each role has its built-in types, each type the
 # parameters its class declares (where each default comes from is said there), by the names of its package's

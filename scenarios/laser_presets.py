@@ -20,11 +20,12 @@ return), as the manufacturers state them.
   12 mm), an assumption.
 """
 
+from sensors.laser import SICK_LMS500_NOISE
+
 LASER_PRESETS = {
     "sick_lms500": {
         "height": 0.70, "fov_deg": 190.0, "resolution_deg": 0.5, "range_min": 0.0, "range_max": 20.0, "rate": 25.0,
-        "noise": [{"up_to": 10.0, "systematic": 0.025, "statistical": 0.007},
-                  {"up_to": 20.0, "systematic": 0.035, "statistical": 0.009}],
+        "noise": SICK_LMS500_NOISE,
     },
     "hokuyo_utm30lx": {
         "fov_deg": 270.0, "resolution_deg": 0.25, "range_min": 0.1, "range_max": 30.0, "rate": 40.0,

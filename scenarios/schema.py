@@ -113,16 +113,20 @@ class Typed:
                          "SCHEMA (a scenarios.schema.Schema) if it has one")
 
 
-def schema_of(cls: type) -> Schema:
+def schema_of(cls: type, presets: dict[str, dict] | None = None) -> Schema:
     """The parameters a part declares on its class (pipeline/params.py ``param``: dataclass fields with
-    their default, range and doc) as a Schema, with the class's ``CHECKS`` across them."""
+    their default, range and doc) as a Schema, with the class's ``CHECKS`` across them; with ``presets`` (a sensor's
+    models), the part's ``preset`` parameter names one of them (``Schema.presets``)."""
     fields = {}
     for f in dataclasses.fields(cls):
         declared = f.metadata.get("param")
         if declared is not None:
             fields[f.name] = _declared(f.default if f.default_factory is dataclasses.MISSING else f.default_factory(),
                                        declared)
-    return Schema(fields, checks=tuple(getattr(cls, "CHECKS", ())))
+    if presets is not None:
+        # the preset's default None names no model: a string key like any other, not a section left out
+        fields["preset"] = dataclasses.replace(fields["preset"], choices=tuple(presets), optional=False)
+    return Schema(fields, presets=presets, checks=tuple(getattr(cls, "CHECKS", ())))
 
 
 def _kind(value: Any) -> str:
@@ -131,10 +135,12 @@ def _kind(value: Any) -> str:
 
 def _declared(default: Any, p: dict) -> Field:
     """The Field of one declared parameter (its kind that of its default, or the one it names: optional when its
-    default is None)."""
+    default is None, required when it has none)."""
     if p["kind"] is not None:
-        return Field(p["kind"], default, min=p["min"], max=p["max"], exclusive_min=p["exclusive_min"],
-                     choices=p["choices"], doc=p["doc"], optional=default is None)
+        required = default is dataclasses.MISSING
+        return Field(p["kind"], None if required else default, required=required, min=p["min"], max=p["max"],
+                     exclusive_min=p["exclusive_min"], choices=p["choices"], doc=p["doc"],
+                     optional=default is None)
     if isinstance(default, dict):
         return Field(MapOf(_item(next(iter(default.values())), p["item"])), default, doc=p["doc"])
     if not isinstance(default, list):
@@ -142,6 +148,8 @@ def _declared(default: Any, p: dict) -> Field:
                      choices=p["choices"], doc=p["doc"])
     if p["parts"] is not None:
         item = Field(slot_typed(p["parts"]))
+    elif isinstance(p["item"], type):
+        item = Field(schema_of(p["item"]))
     else:
         item = _item(default[0], p["item"])
     return Field(ListOf(item, min_items=p["min_items"]), default, doc=p["doc"])

@@ -19,6 +19,7 @@ import numpy as np
 
 from pipeline.camera_geometry import floor_homography, image_to_floor
 from pipeline.frames import inverse, rotation
+from pipeline.params import REQUIRED, param
 from pipeline.types import CameraFrame, DepthFrame
 
 from . import body, bodycast
@@ -274,15 +275,15 @@ def make_renderer(scene: Scene, intrinsics: Intrinsics, exclude_body: int = -1, 
     return RaycastRenderer(scene, intrinsics, exclude_body, people)
 
 
-def kinect_noise(depth: np.ndarray, rng: np.random.Generator, p: dict) -> np.ndarray:
+def kinect_noise(depth: np.ndarray, rng: np.random.Generator, camera: DepthCamera) -> np.ndarray:
     """The depth error of a structured-light camera after Khoshelham & Elberink 2012 (Sensors 12(2) 1437-1454):
     Gaussian with sigma ``noise_sigma`` z^2, then the depth quantized through the disparity, measured in steps of
     1 / ``disparity_subpixel`` pixel by an IR camera of focal length ``ir_focal_px`` on a baseline ``ir_baseline``
     (the camera's scenario keys; the Kinect's by default)."""
     seen = np.isfinite(depth)
     z = np.where(seen, depth, 0.0)
-    noisy = z + rng.standard_normal(depth.shape) * (p["noise_sigma"] * z * z)
-    fb = p["ir_focal_px"] * p["ir_baseline"] * p["disparity_subpixel"]
+    noisy = z + rng.standard_normal(depth.shape) * (camera.noise_sigma * z * z)
+    fb = camera.ir_focal_px * camera.ir_baseline * camera.disparity_subpixel
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(seen, fb / np.round(fb / noisy), np.inf).astype(np.float32)
 
@@ -294,7 +295,7 @@ class CameraSensor(Periodic):
     name: str
     scene: Scene
     intrinsics: Intrinsics
-    p: dict
+    range_max = np.inf  # m: the depth camera's range; a wall camera's reaches as far as it sees
 
     def pose_in_odom(self, world) -> np.ndarray:
         """The optical frame in odom (a 4x4 transform), placed through the robot's localisation in the map (the true
@@ -314,7 +315,7 @@ class CameraSensor(Periodic):
         n = len(agents.id)
         origin, rot = camera_pose(self.scene, self.name)
         cam = (np.column_stack([agents.position, np.full(n, 1.0)]) - origin) @ rot
-        ahead = (cam[:, 2] > 0.05) & (cam[:, 2] <= self.p.get("range_max", np.inf))
+        ahead = (cam[:, 2] > 0.05) & (cam[:, 2] <= self.range_max)
         size = self.intrinsics
         uv = size.project(np.where(ahead[:, None], cam, [0.0, 0.0, 1.0]))
         in_view = ahead & (uv >= 0).all(axis=1) & (uv[:, 0] < size.width) & (uv[:, 1] < size.height)
@@ -331,19 +332,41 @@ def on_persons(agent_ids: np.ndarray, ids: np.ndarray, values: np.ndarray, missi
     return out
 
 
+@dataclass(kw_only=True, eq=False)
 class DepthCamera(CameraSensor):
-    """An RGB-D camera on the robot: z-depth with Kinect noise, a point cloud, segmentation, optional colour."""
+    """An RGB-D camera on the robot: z-depth with Kinect noise, a point cloud, segmentation, optional colour. Made as
+    ``DepthCamera(scene=..., rng=..., **params)``; the scenario format fills the values of a ``preset`` in."""
 
-    def __init__(self, params: dict, scene: Scene, rng: np.random.Generator):
-        self.p = params
-        self.name = params["name"]
-        self.scene = scene
-        self.rng = rng
-        self.intrinsics = Intrinsics(params["width"], params["height"], params["fovy_deg"])
-        self.period = 1.0 / params["rate"]
+    name: str = param(REQUIRED, "the camera's optical frame name", kind="str")
+    preset: str | None = param(None, "a camera model whose values fill the keys not given", kind="str")
+    position: list = param([0.45, 0.0, 1.45], "m, in base_link (SPENCER: RGB-D cameras at head height, front and "
+                                              "rear)", kind="point3")
+    yaw: float = param(0.0, "rad, viewing direction in base_link (pi: looking backwards)")
+    pitch: float = param(0.0, "rad, tilt down (positive) or up", min=-1.57, max=1.57)
+    width: int = param(160, "pixels", min=8, max=4096)
+    height: int = param(120, "pixels", min=8, max=4096)
+    fovy_deg: float = param(43.0, "deg, vertical field of view (Kinect: 43)", min=1.0, max=170.0)
+    range_min: float = param(0.5, "m, nearer depths read NaN (Kinect: 0.5)", min=0.0)
+    range_max: float = param(8.0, "m, farther depths read NaN (Kinect: ~8)", min=0.0, exclusive_min=True)
+    rate: float = param(15.0, "Hz, at most 1 / dt", min=0.0, exclusive_min=True)
+    noise: str = param("kinect", "kinect: Gaussian depth noise, then depth quantized through the disparity (the keys "
+                                 "below)", choices=("kinect", "none"))
+    noise_sigma: float = param(1.425e-3, "1/m, the noise's sigma per z^2 (Khoshelham & Elberink 2012: 1.425e-3)",
+                               min=0.0)
+    ir_focal_px: float = param(580.0, "px, focal length of the IR camera the disparity is measured in (Kinect: 580)",
+                               min=0.0, exclusive_min=True)
+    ir_baseline: float = param(0.075, "m, IR projector to IR camera (Kinect: 0.075)", min=0.0, exclusive_min=True)
+    disparity_subpixel: int = param(8, "disparity steps per pixel (Kinect: 8, a 1/8-pixel step)", min=1)
+    rgb: bool = param(False, "render a colour image too (a second pass)")
+    scene: Scene
+    rng: np.random.Generator
+
+    def __post_init__(self):
+        self.intrinsics = Intrinsics(self.width, self.height, self.fovy_deg)
+        self.period = 1.0 / self.rate
         # beyond its range a depth camera measures nothing, so nothing there need be drawn, unless it takes colour
-        self.renderer = make_renderer(scene, self.intrinsics, scene.robot_body, params["rgb"],
-                                      range_max=np.inf if params["rgb"] else params["range_max"])
+        self.renderer = make_renderer(self.scene, self.intrinsics, self.scene.robot_body, self.rgb,
+                                      range_max=np.inf if self.rgb else self.range_max)
         self._rays = self.intrinsics.pixel_directions()
 
     @property
@@ -359,11 +382,11 @@ class DepthCamera(CameraSensor):
 
     def render(self, stamp: float) -> DepthFrame:
         """Render the scene as it was last synced."""
-        out = self.renderer.render(self.name, depth=True, segmentation=True, rgb=self.p["rgb"])
+        out = self.renderer.render(self.name, depth=True, segmentation=True, rgb=self.rgb)
         z = out["depth"]
-        if self.p["noise"] == "kinect":
-            z = kinect_noise(z, self.rng, self.p)
-        valid = (z >= self.p["range_min"]) & (z <= self.p["range_max"])
+        if self.noise == "kinect":
+            z = kinect_noise(z, self.rng, self)
+        valid = (z >= self.range_min) & (z <= self.range_max)
         z = np.where(valid, z, np.nan).astype(np.float32)
         points = self._rays[valid] * z[valid][:, None]
         # person ids where the camera measured something: beyond its range it sees no one (and the GL renderer
@@ -380,21 +403,31 @@ class DepthCamera(CameraSensor):
         return frame
 
 
+@dataclass(kw_only=True, eq=False)
 class WallCamera(CameraSensor):
-    """A fixed camera: RGB and segmentation, and for every person in view the visible box and visible fraction.
+    """A fixed camera: RGB and segmentation, and for every person in view the visible box and visible fraction. Made
+    as ``WallCamera(scene=..., **params)``.
 
     The renderer draws the world without the people (walls, obstacles, the robot); the people are then ray-cast
     exactly (sensors/bodycast.py) on the pixels their boxes cover and drawn in where they are nearer than the world.
     That casting gives every person's unoccluded silhouette as well, and costs a fraction of drawing them under Mesa.
     """
 
-    def __init__(self, params: dict, scene: Scene):
-        self.p = params
-        self.name = params["name"]
-        self.scene = scene
-        self.intrinsics = Intrinsics(params["width"], params["height"], params["fovy_deg"])
-        self.period = 1.0 / params["rate"]
-        self.renderer = make_renderer(scene, self.intrinsics, rgb=params["rgb"], people=False)
+    name: str = param(REQUIRED, "the camera's frame name", kind="str")
+    position: list = param(REQUIRED, "m, in the world", kind="point3")
+    yaw: float = param(0.0, "rad, viewing direction in the world")
+    pitch: float = param(0.5, "rad, tilt down (positive)", min=-1.57, max=1.57)
+    width: int = param(320, "pixels (seed 001: flea2 cameras, up to 640 x 480)", min=8, max=4096)
+    height: int = param(240, "pixels", min=8, max=4096)
+    fovy_deg: float = param(45.0, "deg, vertical field of view", min=1.0, max=170.0)
+    rate: float = param(10.0, "Hz, at most 1 / dt", min=0.0, exclusive_min=True)
+    rgb: bool = param(True, "render a colour image (the segmentation and boxes come without it)")
+    scene: Scene
+
+    def __post_init__(self):
+        self.intrinsics = Intrinsics(self.width, self.height, self.fovy_deg)
+        self.period = 1.0 / self.rate
+        self.renderer = make_renderer(self.scene, self.intrinsics, rgb=self.rgb, people=False)
 
     @property
     def backend(self) -> str:
@@ -432,7 +465,7 @@ class WallCamera(CameraSensor):
     def render(self, stamp: float) -> CameraFrame:
         """Render the scene as it was last synced."""
         s, k = self.scene, self.intrinsics
-        world = self.renderer.render(self.name, depth=True, segmentation=False, rgb=self.p["rgb"])
+        world = self.renderer.render(self.name, depth=True, segmentation=False, rgb=self.rgb)
         slots = np.arange(s.alive)
         owner, u, v, z, part, weight = person_pixels(s, self.name, k, slots)
         inside = weight == 1.0

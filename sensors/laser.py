@@ -5,48 +5,98 @@ scenarios/laser_presets.py)."""
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import mujoco
 import numpy as np
 
 from pipeline.frames import compose
+from pipeline.params import REQUIRED, param
 from pipeline.types import LaserScan
 
 from .base import Periodic
 from .scene import Scene
 
+# the SICK LMS 500's range error, the default laser's (scenarios/laser_presets.py's sick_lms500 gives its source)
+SICK_LMS500_NOISE = [{"up_to": 10.0, "systematic": 0.025, "statistical": 0.007},
+                     {"up_to": 20.0, "systematic": 0.035, "statistical": 0.009}]
 
+
+def beam_count(fov_deg: float, resolution_deg: float) -> float:
+    """A scan's beams: one per step of the resolution over the field of view, and one at its end unless it is a
+    full circle (whose last beam would repeat the first); inf where the resolution is too fine to count them."""
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        ratio = np.radians(fov_deg) / np.radians(resolution_deg)
+    if not math.isfinite(ratio):
+        return math.inf
+    return int(round(ratio)) + (0 if fov_deg >= 360.0 else 1)
+
+
+def _two_beams(p: dict):
+    beams = beam_count(p["fov_deg"], p["resolution_deg"])
+    if beams < 2:
+        return "resolution_deg", (f"{p['resolution_deg']:g} deg over fov_deg {p['fov_deg']:g} gives {beams:.0f} beam; "
+                                  "expected at least 2 beams (a finer resolution or a wider field of view)")
+
+
+@dataclass(kw_only=True, eq=False)
+class NoiseBand:
+    """One range band of a laser's error (its ``noise``, nearest band first)."""
+
+    up_to: float = param(REQUIRED, "m, the band covers ranges up to this", kind="float", min=0.0, exclusive_min=True)
+    systematic: float = param(0.0, "m, +- bound of the laser's offset (drawn uniformly once per laser, the same on "
+                                   "every beam)", min=0.0)
+    statistical: float = param(0.0, "m, 1-sigma Gaussian noise drawn anew for every return", min=0.0)
+
+
+@dataclass(kw_only=True, eq=False)
 class Laser(Periodic):
     """A planar laser mounted on the robot (``mount`` is its pose in base_link, ``height`` above the floor); a
-    ``Sensor`` (sensors/base.py) whose ``batch``, when a ``LaserArray`` holds it, casts it with the others."""
+    ``Sensor`` (sensors/base.py) whose ``batch``, when a ``LaserArray`` holds it, casts it with the others. Made as
+    ``Laser(scene=..., rng=..., **params)``; the scenario format fills the values of a ``preset`` in (in Python, pass
+    them: ``preset`` only names the model)."""
 
+    name: str = param(REQUIRED, "the laser's frame name", kind="str")
+    preset: str | None = param(None, "a datasheet model whose values fill the keys not given "
+                                     "(scenarios/laser_presets.py)", kind="str")
+    mount: np.ndarray = param(REQUIRED, "m, m, rad: pose in base_link", kind="pose")
+    height: float = param(0.70, "m above the floor (seed 000: two lasers at 70 cm)", min=0.0)
+    fov_deg: float = param(190.0, "deg (SICK LMS500)", min=0.0, exclusive_min=True, max=360.0)
+    resolution_deg: float = param(0.5, "deg between beams (SICK LMS500)", min=0.0, exclusive_min=True)
+    range_min: float = param(0.0, "m, nearer returns are no-returns", min=0.0)
+    range_max: float = param(20.0, "m (seed 000: detections up to 20 m)", min=0.0, exclusive_min=True)
+    rate: float = param(25.0, "Hz (SICK LMS500: 25 or 50 Hz), at most the simulation's steps per second (1 / dt)",
+                        min=0.0, exclusive_min=True)
+    noise: list = param(SICK_LMS500_NOISE, "range error bands, nearest first; beyond the last, the last applies "
+                                           "(SICK LMS5xx HR)", item=NoiseBand)
+    no_return: str = param("nan", "what a beam without a return reads: NaN, or range_max as many drivers report",
+                           choices=("nan", "range_max"))
+    scene: Scene
+    rng: np.random.Generator
+
+    CHECKS = (_two_beams,)
     batch = None
 
-    def __init__(self, params: dict, scene: Scene, rng: np.random.Generator):
-        self.p = params
-        self.name = params["name"]
-        self.scene = scene
-        self.rng = rng
-        self.mount = np.array(params["mount"], float)
-        fov, res = np.radians(params["fov_deg"]), np.radians(params["resolution_deg"])
-        full_circle = params["fov_deg"] >= 360.0
-        # a full circle has no last beam: it would repeat the first
-        self.n_beams = int(round(fov / res)) + (0 if full_circle else 1)
-        if self.n_beams < 2:
-            raise ValueError(f"laser {self.name}: fov_deg / resolution_deg gives {self.n_beams} beam(s); expected >= 2")
+    def __post_init__(self):
+        self.mount = np.array(self.mount, float)
+        fov = np.radians(self.fov_deg)
+        full_circle = self.fov_deg >= 360.0
+        self.n_beams = beam_count(self.fov_deg, self.resolution_deg)
         self.angle_min = -fov / 2
         self.angle_increment = fov / (self.n_beams if full_circle else self.n_beams - 1)
         self.angles = self.angle_min + self.angle_increment * np.arange(self.n_beams)
-        self.period = 1.0 / params["rate"]
-        bands = params["noise"]
-        self._band_edges = np.array([b["up_to"] for b in bands[:-1]])
-        self._systematic = np.array([b["systematic"] for b in bands] or [0.0])
-        self._statistical = np.array([b["statistical"] for b in bands] or [0.0])
+        self.period = 1.0 / self.rate
+        bands = [NoiseBand(**b) for b in self.noise]
+        self._band_edges = np.array([b.up_to for b in bands[:-1]])
+        self._systematic = np.array([b.systematic for b in bands] or [0.0])
+        self._statistical = np.array([b.statistical for b in bands] or [0.0])
         # where this laser's offset lies within +- the systematic bound: drawn once, the same for every beam and scan
-        self._bias_share = float(rng.uniform(-1.0, 1.0))
+        self._bias_share = float(self.rng.uniform(-1.0, 1.0))
         self._vec = np.zeros((self.n_beams, 3))
         self._dist = np.zeros(self.n_beams)
         self._geom = np.zeros(self.n_beams, np.int32)
-        self._groups = scene.groups_at(params["height"])  # only the body parts at the laser's height
+        self._groups = self.scene.groups_at(self.height)  # only the body parts at the laser's height
 
     def pose_in(self, base_pose: np.ndarray) -> np.ndarray:
         """The laser's pose in the frame ``base_pose`` is given in."""
@@ -68,8 +118,8 @@ class Laser(Periodic):
         pose = self.pose_in(world.robot.pose)
         rel = agents.position - pose[:2]
         bearing = np.arctan2(rel[:, 1], rel[:, 0]) - pose[2]
-        in_view = (np.linalg.norm(rel, axis=1) <= self.p["range_max"]) & (
-            np.abs(np.arctan2(np.sin(bearing), np.cos(bearing))) <= np.radians(self.p["fov_deg"]) / 2)
+        in_view = (np.linalg.norm(rel, axis=1) <= self.range_max) & (
+            np.abs(np.arctan2(np.sin(bearing), np.cos(bearing))) <= np.radians(self.fov_deg) / 2)
         return beams, in_view
 
     def rays(self, robot_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -78,26 +128,25 @@ class Laser(Periodic):
         a = pose[2] + self.angles
         self._vec[:, 0] = np.cos(a)
         self._vec[:, 1] = np.sin(a)
-        return np.array([pose[0], pose[1], self.p["height"]]), self._vec
+        return np.array([pose[0], pose[1], self.height]), self._vec
 
     def scan(self, stamp: float, robot_pose: np.ndarray) -> LaserScan:
         """Cast every beam from the laser's true pose; the scene must be synced to the same instant."""
         origin, vec = self.rays(robot_pose)
         m, d = self.scene.model, self.scene.data
         mujoco.mj_multiRay(m, d, origin, vec.reshape(-1), self._groups, 1, self.scene.robot_body, self._geom,
-                           self._dist, None, self.n_beams, self.p["range_max"])
+                           self._dist, None, self.n_beams, self.range_max)
         return self.reading(stamp, self._dist, self._geom)
 
     def reading(self, stamp: float, dist: np.ndarray, geom: np.ndarray) -> LaserScan:
         """The scan from the beams' true distances (-1 or beyond range: no return) and hit geoms: range errors,
         range limits, the no-return value and the ground-truth person per beam."""
-        hit = (dist >= self.p["range_min"]) & (dist <= self.p["range_max"])
+        hit = (dist >= self.range_min) & (dist <= self.range_max)
         ranges = dist + self.range_error(dist)
-        ranges = np.where(hit, np.clip(ranges, self.p["range_min"], self.p["range_max"]),
-                          np.nan if self.p["no_return"] == "nan" else self.p["range_max"])
+        ranges = np.where(hit, np.clip(ranges, self.range_min, self.range_max),
+                          np.nan if self.no_return == "nan" else self.range_max)
         person = np.where(hit, self.scene.person_of_geom(geom), -1)
-        return LaserScan(stamp, self.name, self.angle_min, self.angle_increment, self.p["range_max"], ranges, person)
-
+        return LaserScan(stamp, self.name, self.angle_min, self.angle_increment, self.range_max, ranges, person)
 
     def range_error(self, true_range: np.ndarray) -> np.ndarray:
         """Each beam's error at these true ranges: the laser's offset plus fresh Gaussian noise, by range band."""

@@ -17,41 +17,35 @@ Errors are Gaussian, drawn fresh per reading; the reported range is kept within 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from pipeline.frames import inverse, transform_points, wrap_angle
+from pipeline.params import ordered, param
 from pipeline.types import TagReading
 
 from .base import DUE_TOLERANCE
 
-TAG_DEFAULTS = {
-    "rate": 5.0,  # Hz, an assumption (see above)
-    "range_min": 0.5,  # m, seed 001 Sec. 3.2
-    "range_max": 4.5,  # m, seed 001 Sec. 3.2
-    "range_sd": 0.5,  # m, an assumption (see above)
-    "bearing_sd_deg": 20.0,  # deg, an assumption (see above)
-    "detection_probability": 0.9,  # an assumption (see above)
-}
 
-
+@dataclass(kw_only=True, eq=False)
 class TagSensor:
-    """Reads the tag at ``rate`` Hz from the robot's true pose; ``params`` override ``TAG_DEFAULTS``."""
+    """Reads the tag at ``rate`` Hz from the robot's true pose: ``TagSensor(rng=..., **params)``."""
 
-    def __init__(self, params: dict, rng: np.random.Generator):
-        unknown = sorted(set(params) - set(TAG_DEFAULTS))
-        if unknown:
-            raise ValueError(f"tag sensor: unknown parameter(s) {unknown}; expected {sorted(TAG_DEFAULTS)}")
-        p = {**TAG_DEFAULTS, **params}
-        if not (p["rate"] > 0 and 0 <= p["range_min"] < p["range_max"] < np.inf):
-            raise ValueError("tag sensor: rate must be > 0 Hz and 0 <= range_min < range_max finite m; got "
-                             f"rate={p['rate']}, range_min={p['range_min']}, range_max={p['range_max']}")
-        if not (p["range_sd"] >= 0 and p["bearing_sd_deg"] >= 0 and 0 <= p["detection_probability"] <= 1):
-            raise ValueError("tag sensor: range_sd and bearing_sd_deg must be >= 0, detection_probability in "
-                             f"[0, 1]; got {p['range_sd']}, {p['bearing_sd_deg']}, {p['detection_probability']}")
-        self.p, self.rng = p, rng
-        self.name = "tag"
-        self.period = 1.0 / p["rate"]
-        self.bearing_sd = float(np.radians(p["bearing_sd_deg"]))
+    rate: float = param(5.0, "Hz, readings per second (an assumption)", min=0.0, exclusive_min=True)
+    range_min: float = param(0.5, "m, nearest tag read (seed 001 Sec. 3.2)", min=0.0)
+    range_max: float = param(4.5, "m, farthest tag read (seed 001 Sec. 3.2)", min=0.0, exclusive_min=True)
+    range_sd: float = param(0.5, "m, range error sd (an assumption: coarse)", min=0.0)
+    bearing_sd_deg: float = param(20.0, "deg, bearing error sd (an assumption: one antenna lobe)", min=0.0)
+    detection_probability: float = param(0.9, "chance a due reading is had (an assumption)", min=0.0, max=1.0)
+    rng: np.random.Generator
+
+    CHECKS = (ordered("range_min", "range_max", strict=True),)
+    name = "tag"
+
+    def __post_init__(self):
+        self.period = 1.0 / self.rate
+        self.bearing_sd = float(np.radians(self.bearing_sd_deg))
         self._next: float | None = None
 
     # as a Sensor (sensors/base.py): its own clock starts at its first read, and it has no detector nor visibility
@@ -82,13 +76,12 @@ class TagSensor:
             self._next = stamp + self.period
         if target_xy_world is None:
             return None
-        p = self.p
         rel = transform_points(inverse(np.asarray(robot_pose_world, float)),
                                np.asarray(target_xy_world, float).reshape(1, 2))[0]
         true_range = float(np.hypot(rel[0], rel[1]))
-        if not p["range_min"] <= true_range <= p["range_max"] or self.rng.random() >= p["detection_probability"]:
+        if not self.range_min <= true_range <= self.range_max or self.rng.random() >= self.detection_probability:
             return None
         noise = self.rng.standard_normal(2)
-        reported = float(np.clip(true_range + p["range_sd"] * noise[0], p["range_min"], p["range_max"]))
+        reported = float(np.clip(true_range + self.range_sd * noise[0], self.range_min, self.range_max))
         bearing = float(wrap_angle(np.arctan2(rel[1], rel[0]) + self.bearing_sd * noise[1]))
-        return TagReading(stamp, reported, bearing, float(p["range_sd"]), self.bearing_sd)
+        return TagReading(stamp, reported, bearing, float(self.range_sd), self.bearing_sd)

@@ -18,7 +18,7 @@ def leg_laser(scene):
     # seed 001's leg laser: 180 degrees at 0.5 degrees, 38 cm above the floor; exact ranges
     params = validate({"name": "leg_laser", "mount": [0.0, 0.0, 0.0], "height": 0.38, "fov_deg": 180.0,
                        "resolution_deg": 0.5, "noise": []}, LASER, "<test>")
-    return Laser(params, scene, np.random.default_rng(0))
+    return Laser(scene=scene, rng=np.random.default_rng(0), **params)
 
 
 def runs_on(scan, person_id):
@@ -116,7 +116,7 @@ def test_a_scene_holds_only_the_parts_its_sensors_see():
         scene.sync(np.zeros(3), np.arange(5), np.array([[2.0, y] for y in (-2, -1, 0, 1, 2)]),
                    np.full((5, 2), 1.0), np.linspace(0, 1, 5))
     params = validate({"name": "l", "mount": [0.0, 0.0, 0.0], "noise": []}, LASER, "<test>")
-    a, b = (Laser(params, s, np.random.default_rng(0)).scan(0.0, np.zeros(3)) for s in (full, torsos))
+    a, b = (Laser(scene=s, rng=np.random.default_rng(0), **params).scan(0.0, np.zeros(3)) for s in (full, torsos))
     np.testing.assert_array_equal(a.ranges, b.ranges)
     np.testing.assert_array_equal(a.person_id, b.person_id)
 
@@ -155,7 +155,7 @@ def test_a_laser_sees_each_body_at_its_own_size_as_slots_change_hands():
     # a child (s 0.72) first, then an adult (s 1.0) in the same slot, then the child again
     scene = Scene(np.array(FAR_WALL), 0.425, 1, parts={"torso"})
     params = validate({"name": "l", "mount": [0.25, 0.0, 0.0], "noise": []}, LASER, "<test>")
-    laser = Laser(params, scene, np.random.default_rng(0))
+    laser = Laser(scene=scene, rng=np.random.default_rng(0), **params)
     for scale in (0.72, 1.0, 0.72):
         scene.sync(np.zeros(3), np.array([1]), np.array([[3.0, 0.0]]), person_scale=np.array([scale]))
         scan = laser.scan(0.0, np.zeros(3))
@@ -173,7 +173,7 @@ def test_a_childs_head_is_lower_in_the_depth_image():
            "height": 120, "rate": 15.0, "range_min": 0.5, "range_max": 8.0, "noise": "none", "rgb": False}
     scene = Scene(np.array(FAR_WALL), 0.425, 1, robot_cameras=[cam])
     scene.sync(np.array([0.0, 0.0, 0.0]), np.array([3]), np.array([[4.0, 0.0]]), person_scale=np.array([0.72]))
-    frame = DepthCamera(cam, scene, np.random.default_rng(0)).render(0.0)
+    frame = DepthCamera(scene=scene, rng=np.random.default_rng(0), **cam).render(0.0)
     rows = np.flatnonzero((frame.person_id == 3).any(axis=1))
     k = Intrinsics(160, 120, 43.0)
     top = body.HEIGHT * 0.72

@@ -57,7 +57,7 @@ def test_a_wall_camera_shows_people_in_their_colours_and_not_through_walls(rende
     scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1, 2]), np.array([[6.0, 2.0], [6.0, 0.0]]))
     if renderer == "raycast":
         monkeypatch.setenv("MUJOCO_GL", "disable")
-    camera = WallCamera(CAM, scene)
+    camera = WallCamera(scene=scene, **CAM)
     assert isinstance(camera.renderer, GLRenderer if renderer == "gl" else RaycastRenderer)
     frame = camera.render(0.0)
     assert list(frame.ids) == [2]

@@ -40,7 +40,7 @@ def expected_depth(cam):
 def test_depth_of_a_known_plane_and_of_the_floor(renderer):
     scene, cam = depth_scene()
     scene.sync(np.zeros(3), np.zeros(0, np.int64), np.zeros((0, 2)))
-    camera = DepthCamera(cam, scene, np.random.default_rng(0))
+    camera = DepthCamera(scene=scene, rng=np.random.default_rng(0), **cam)
     if renderer == "raycast":
         camera.renderer = RaycastRenderer(scene, camera.intrinsics, scene.robot_body)
     else:
@@ -64,7 +64,7 @@ def test_depth_of_a_known_plane_and_of_the_floor(renderer):
 def test_point_cloud_lies_on_the_wall():
     scene, cam = depth_scene()
     scene.sync(np.zeros(3), np.zeros(0, np.int64), np.zeros((0, 2)))
-    frame = DepthCamera(cam, scene, np.random.default_rng(0)).render(0.0)
+    frame = DepthCamera(scene=scene, rng=np.random.default_rng(0), **cam).render(0.0)
     origin, rot = camera_pose(scene, cam["name"])
     world = frame.points @ rot.T + origin
     on_wall = np.abs(world[:, 0] - 4.95) < 1e-3
@@ -81,7 +81,7 @@ def test_kinect_noise_has_the_configured_sigma_and_disparity_steps(sigma, subpix
     scene, cam = depth_scene(noise="kinect", range_max=20.0, noise_sigma=sigma, disparity_subpixel=subpixel)
     assert (cam["ir_focal_px"], cam["ir_baseline"]) == (580.0, 0.075)
     scene.sync(np.zeros(3), np.zeros(0, np.int64), np.zeros((0, 2)))
-    frame = DepthCamera(cam, scene, np.random.default_rng(3)).render(0.0)
+    frame = DepthCamera(scene=scene, rng=np.random.default_rng(3), **cam).render(0.0)
     wall = np.abs(expected_depth(cam) - 4.5) < 1e-9
     z = frame.depth[wall & np.isfinite(frame.depth)]
     steps = subpixel * 580.0 * 0.075 / z
@@ -96,7 +96,7 @@ def test_wall_camera_box_of_a_person_is_its_projection_within_a_pixel():
     # pixels equals the box around the projection of the body's surface (torso cylinder, head sphere, legs)
     scene = Scene(np.array(WALL_X) * 3, 0.425, 2, wall_cameras=[WALL_CAM])
     scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([4]), np.array([[6.0, 0.5]]))
-    frame = WallCamera(WALL_CAM, scene).render(0.0)
+    frame = WallCamera(scene=scene, **WALL_CAM).render(0.0)
     assert list(frame.ids) == [4]
     origin, rot = camera_pose(scene, WALL_CAM["name"])
     a = np.linspace(0, 2 * np.pi, 720)
@@ -120,13 +120,13 @@ def test_visible_fraction_of_a_half_hidden_person():
     cam = dict(WALL_CAM, pitch=0.0, position=[0.0, 0.0, 1.0])
     scene = Scene(np.array(WALL_X) * 3, 0.425, 2, wall_cameras=[cam])
     scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1, 2]), np.array([[6.0, 0.78], [8.0, 0.85]]))
-    frame = WallCamera(cam, scene).render(0.0)
+    frame = WallCamera(scene=scene, **cam).render(0.0)
     fraction = dict(zip(frame.ids.tolist(), frame.visible_fraction))
     assert fraction[1] == pytest.approx(1.0, abs=0.03)
     assert 0.2 < fraction[2] < 0.8
     # hidden entirely: person 2 right behind person 1 on the camera's line of sight
     scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1, 2]), np.array([[6.0, 0.0], [9.0, 0.0]]))
-    frame = WallCamera(cam, scene).render(0.0)
+    frame = WallCamera(scene=scene, **cam).render(0.0)
     assert 2 not in frame.ids or dict(zip(frame.ids.tolist(), frame.visible_fraction))[2] < 0.05
 
 
@@ -137,9 +137,10 @@ def test_segmentation_agrees_with_laser_hits():
     xy = np.stack([rng.uniform(1.5, 7.5, 14), rng.uniform(-2.5, 2.5, 14)], 1)
     scene, cam = depth_scene(capacity=14, position=[0.0, 0.0, 0.70], range_max=20.0)
     scene.sync(np.zeros(3), np.arange(14), xy)
-    frame = DepthCamera(cam, scene, np.random.default_rng(0)).render(0.0)
-    laser = Laser(validate({"name": "l", "mount": [0.0, 0.0, 0.0], "fov_deg": 56.0, "resolution_deg": 0.25,
-                            "noise": []}, LASER, "<test>"), scene, np.random.default_rng(0))
+    frame = DepthCamera(scene=scene, rng=np.random.default_rng(0), **cam).render(0.0)
+    laser = Laser(scene=scene, rng=np.random.default_rng(0),
+                  **validate({"name": "l", "mount": [0.0, 0.0, 0.0], "fov_deg": 56.0, "resolution_deg": 0.25,
+                              "noise": []}, LASER, "<test>"))
     scan = laser.scan(0.0, np.zeros(3))
     beams = np.bincount(scan.person_id[scan.person_id >= 0], minlength=14)
     pixels = np.bincount(frame.person_id[frame.person_id >= 0], minlength=14)
@@ -152,7 +153,7 @@ def test_segmentation_agrees_with_laser_hits():
 def test_wall_camera_calibration_maps_the_image_to_the_floor():
     scene = Scene(np.array(WALL_X) * 3, 0.425, 1, wall_cameras=[WALL_CAM])
     scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1]), np.array([[6.0, 0.5]]))
-    camera = WallCamera(WALL_CAM, scene)
+    camera = WallCamera(scene=scene, **WALL_CAM)
     floor = np.array([[4.0, -1.0], [6.0, 0.5], [9.0, 2.0]])
     origin, rot = camera_pose(scene, WALL_CAM["name"])
     uv = Intrinsics(320, 240, 50.0).project((np.column_stack([floor, np.zeros(3)]) - origin) @ rot)
@@ -176,7 +177,7 @@ def test_a_head_height_depth_camera_sees_the_floor_and_the_heads():
     cam = dict(DEPTH, position=[0.45, 0.0, 1.45], pitch=0.15)
     scene = Scene(np.array(WALL_X) * 3, 0.425, 1, robot_cameras=[cam])
     scene.sync(np.zeros(3), np.array([9]), np.array([[3.5, 0.0]]))
-    camera = DepthCamera(cam, scene, np.random.default_rng(0))
+    camera = DepthCamera(scene=scene, rng=np.random.default_rng(0), **cam)
     frame = camera.render(0.0)
     origin, rot = camera_pose(scene, cam["name"])
     valid = np.isfinite(frame.depth)
@@ -195,12 +196,12 @@ def test_without_gl_the_cameras_fall_back_to_ray_casting_and_say_so(monkeypatch)
     scene, cam = depth_scene()
     scene.sync(np.zeros(3), np.zeros(0, np.int64), np.zeros((0, 2)))
     monkeypatch.setenv("MUJOCO_GL", "disable")
-    camera = DepthCamera(cam, scene, np.random.default_rng(0))
+    camera = DepthCamera(scene=scene, rng=np.random.default_rng(0), **cam)
     assert camera.backend == "raycast"
     frame = camera.render(0.0)
     wall = np.abs(expected_depth(cam) - 4.5) < 1e-9
     np.testing.assert_allclose(frame.depth[wall], 4.5, atol=1e-6)
-    assert WallCamera(WALL_CAM, Scene(np.array(WALL_X), 0.425, 1, wall_cameras=[WALL_CAM])).backend == "raycast"
+    assert WallCamera(scene=Scene(np.array(WALL_X), 0.425, 1, wall_cameras=[WALL_CAM]), **WALL_CAM).backend == "raycast"
 
 
 def test_walls_out_of_view_are_left_out_without_changing_the_image():
@@ -210,7 +211,7 @@ def test_walls_out_of_view_are_left_out_without_changing_the_image():
              [[-6, -3], [-6, 3]], [[4, 2], [6, 2]], [[3, -1], [3, -4]], [[-2, 6], [2, 6]]]
     scene, cam = depth_scene(walls, capacity=3)
     scene.sync(np.zeros(3), np.array([1, 2, 3]), np.array([[2.0, 0.5], [5.0, -1.0], [-3.0, 0.0]]))
-    camera = DepthCamera(cam, scene, np.random.default_rng(0))
+    camera = DepthCamera(scene=scene, rng=np.random.default_rng(0), **cam)
     assert isinstance(camera.renderer, GLRenderer), "no GL context here: the ray-casting renderer culls nothing"
     renderer = camera.renderer
     culled = renderer._walls[renderer._frustum(cam["name"], renderer._wall_corners)]
@@ -237,9 +238,10 @@ def test_a_scene_grown_for_more_people_sees_what_a_big_one_does():
         scene = Scene(np.array(WALL_X) * 3, 0.425, 60, robot_cameras=[DEPTH], wall_cameras=[wall_cam],
                       initial_capacity=initial)
         scene.sync(np.zeros(3), np.arange(3), xy[:3], vel[:3], walked[:3])
-        lasers = LaserArray([Laser(validate({"name": "l", "mount": [0, 0, 0], "noise": []}, LASER, "<test>"),
-                                   scene, np.random.default_rng(0))], scene)
-        depth, wall = DepthCamera(DEPTH, scene, np.random.default_rng(0)), WallCamera(wall_cam, scene)
+        lasers = LaserArray([Laser(scene=scene, rng=np.random.default_rng(0),
+                                   **validate({"name": "l", "mount": [0, 0, 0], "noise": []}, LASER, "<test>"))], scene)
+        depth = DepthCamera(scene=scene, rng=np.random.default_rng(0), **DEPTH)
+        wall = WallCamera(scene=scene, **wall_cam)
         before = (lasers.scan(0.0, np.zeros(3), [0])[0].ranges, depth.render(0.0).depth, wall.render(0.0).rgb)
         scene.sync(np.zeros(3), np.arange(50), xy, vel, walked)
         assert scene.capacity == (60 if initial == 60 else 50)
@@ -259,7 +261,7 @@ def test_a_renderer_freed_leaves_the_others_images_alone():
     def camera():
         scene = Scene(np.array(WALL_X) * 3, 0.425, 2, wall_cameras=[dict(WALL_CAM, rgb=True)])
         scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1, 2]), np.array([[6.0, 0.5], [8.0, -1.0]]))
-        return WallCamera(dict(WALL_CAM, rgb=True), scene)
+        return WallCamera(scene=scene, **dict(WALL_CAM, rgb=True))
 
     first = camera()
     image = first.render(0.0).rgb

@@ -97,7 +97,7 @@ def test_beams_are_counted_as_the_laser_counts_them(fov, res, beams):
              "range_min": 0.0, "range_max": 20.0, "noise": [], "no_return": "nan"}
     assert laser_beams(laser) == beams
     scene = types.SimpleNamespace(groups_at=Scene.groups_at)
-    assert Laser(laser, scene, np.random.default_rng(0)).n_beams == beams
+    assert Laser(scene=scene, rng=np.random.default_rng(0), **laser).n_beams == beams
 
 
 def test_huge_beam_counts_stay_numbers():

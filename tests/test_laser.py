@@ -63,7 +63,7 @@ def make(walls, persons=(), ids=None, robot_pose=(0.0, 0.0, 0.0), robot_radius=0
     scene = Scene(np.array(walls, float).reshape(-1, 2, 2), robot_radius, capacity)
     ids = np.arange(len(persons)) + 100 if ids is None else np.asarray(ids)
     scene.sync(np.array(robot_pose, float), ids, np.array(persons, float).reshape(-1, 2))
-    laser = Laser(laser_params(**over), scene, np.random.default_rng(seed))
+    laser = Laser(scene=scene, rng=np.random.default_rng(seed), **laser_params(**over))
     return scene, laser
 
 
@@ -112,7 +112,7 @@ def room_lasers(preset: str, half: float, seed: int = 5, **over):
              [[-half, half], [-half, -half]]]
     params = dict(preset=preset, mount=[0.0, 0.0, 0.0], fov_deg=360.0, resolution_deg=0.036, **over)
     scene, noisy = make(walls, seed=seed, **params)
-    exact = Laser(laser_params(**dict(params, noise=[])), scene, np.random.default_rng(0))
+    exact = Laser(scene=scene, rng=np.random.default_rng(0), **laser_params(**dict(params, noise=[])))
     return noisy, exact.scan(0.0, np.zeros(3)).ranges
 
 
@@ -287,11 +287,11 @@ def test_one_batched_call_for_all_lasers_gives_the_scans_of_one_call_each():
     scene = Scene(np.array([FRONT_WALL, REAR_WALL], float), 0.425, n)
     params = [laser_params(noise=[]), laser_params(name="rear", mount=[-0.25, 0.0, float(np.pi)], noise=[]),
               laser_params(name="legs", height=0.38, fov_deg=360.0, noise=[])]
-    array = LaserArray([Laser(p, scene, np.random.default_rng(k)) for k, p in enumerate(params)], scene, threads=2)
+    array = LaserArray([Laser(scene=scene, rng=np.random.default_rng(k), **p) for k, p in enumerate(params)], scene, threads=2)
     assert array.batch is not None  # MuJoCo 4's batch module is here
     for sizes in (rng.uniform(0.65, 1.05, n), rng.uniform(0.65, 1.05, n)):
         scene.sync(np.zeros(3), np.arange(n) + 1, persons, np.full((n, 2), 1.0), rng.uniform(0, 2, n), sizes)
-        one_each = [Laser(p, scene, np.random.default_rng(k)).scan(0.5, np.zeros(3)) for k, p in enumerate(params)]
+        one_each = [Laser(scene=scene, rng=np.random.default_rng(k), **p).scan(0.5, np.zeros(3)) for k, p in enumerate(params)]
         batched = array.scan(0.5, np.zeros(3), [0, 1, 2])
         for a, b in zip(one_each, batched):
             np.testing.assert_array_equal(a.ranges, b.ranges)

@@ -17,7 +17,6 @@ from evaluation.navigation import navigation_metrics, read_nav_run
 from pipeline.navigation.planners import NDPlanner, build_planner
 from scenarios import ScenarioError, load_scenario
 from scenarios.format import TAG
-from sensors.tag import TAG_DEFAULTS
 
 LASERS = [{"name": "front_laser", "mount": [0.25, 0, 0]}, {"name": "rear_laser", "mount": [-0.25, 0, math.pi]}]
 
@@ -107,15 +106,15 @@ def test_a_follow_target_on_an_unknown_route_or_too_fast_or_in_a_wall_is_refused
     refused(tmp_path, data, "robot.follow.target.start", "inside a wall")
 
 
-def test_driver_defaults_and_the_tag_schema_matches_its_class(tmp_path):
+def test_driver_defaults_and_the_tag_defaults(tmp_path):
     sc = load(tmp_path, room())
     robot = sc["robot"]
     assert robot["driver"] == "route" and robot["goals"] is None and robot["follow"] is None
     assert robot["goal_radius"] == 0.3 and robot["planner"]["type"] == "zone"
     assert sc["sensors"]["tag"] is None
-    assert {k: f.default for k, f in TAG.fields.items()} == TAG_DEFAULTS
     follow = load(tmp_path, follow_room())
-    assert follow.robot.follow.band == (1.0, 2.0) and follow.sensors.tag == TAG_DEFAULTS
+    assert follow.robot.follow.band == (1.0, 2.0)
+    assert follow.sensors.tag == {k: f.default for k, f in TAG.fields.items()}
 
 
 # ---- the loop ----

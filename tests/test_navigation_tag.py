@@ -4,13 +4,15 @@ statistics of its errors and detections over many draws."""
 import numpy as np
 import pytest
 
-from sensors.tag import TAG_DEFAULTS, TagSensor
+from scenarios.format import TAG
+from scenarios.schema import ScenarioError, validate
+from sensors.tag import TagSensor
 
 EXACT = {"range_sd": 0.0, "bearing_sd_deg": 0.0, "detection_probability": 1.0}
 
 
 def test_readings_only_within_0_5_to_4_5_m_all_around():
-    tag = TagSensor({**EXACT, "rate": 1000.0}, np.random.default_rng(0))
+    tag = TagSensor(rng=np.random.default_rng(0), **EXACT, rate=1000.0)
     robot = np.array([1.0, 2.0, 0.3])
     got = []
     for k, (distance, angle) in enumerate([(0.4, 0.0), (0.5, 1.0), (2.0, 3.0), (4.5, -2.0), (4.6, 0.5),
@@ -23,7 +25,7 @@ def test_readings_only_within_0_5_to_4_5_m_all_around():
 
 
 def test_bearing_is_counter_clockwise_from_the_robot_heading():
-    tag = TagSensor({**EXACT, "rate": 1000.0}, np.random.default_rng(0))
+    tag = TagSensor(rng=np.random.default_rng(0), **EXACT, rate=1000.0)
     robot = np.array([1.0, 1.0, np.pi / 2])  # facing +y
     ahead, left, right = (tag.read(k * 0.01, robot, xy) for k, xy in enumerate([[1, 3], [-1, 1], [3, 1]]))
     assert ahead.bearing == pytest.approx(0.0, abs=1e-12)
@@ -34,14 +36,14 @@ def test_bearing_is_counter_clockwise_from_the_robot_heading():
 
 
 def test_reads_at_its_rate():
-    tag = TagSensor({**EXACT, "rate": 5.0}, np.random.default_rng(0))
+    tag = TagSensor(rng=np.random.default_rng(0), **EXACT, rate=5.0)
     stamps = [k * 0.04 for k in range(50)]  # 2 s of 25 Hz ticks
     got = [t for t in stamps if tag.read(t, np.zeros(3), [2.0, 0.0]) is not None]
     assert got == pytest.approx([0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8])
 
 
 def test_errors_and_detections_have_the_stated_statistics():
-    tag = TagSensor({"rate": 1000.0}, np.random.default_rng(7))
+    tag = TagSensor(rng=np.random.default_rng(7), rate=1000.0)
     robot, target = np.array([0.0, 0.0, 0.0]), np.array([1.5, 2.0])  # 2.5 m, 53 deg
     readings = [tag.read(k * 0.001, robot, target) for k in range(20000)]
     seen = [r for r in readings if r is not None]
@@ -49,7 +51,7 @@ def test_errors_and_detections_have_the_stated_statistics():
     assert n / 20000 == pytest.approx(0.9, abs=0.01)
     range_error = np.array([r.range for r in seen]) - 2.5
     bearing_error = np.array([r.bearing for r in seen]) - np.arctan2(2.0, 1.5)
-    sd_r, sd_b = TAG_DEFAULTS["range_sd"], np.radians(TAG_DEFAULTS["bearing_sd_deg"])
+    sd_r, sd_b = TagSensor.range_sd, np.radians(TagSensor.bearing_sd_deg)
     assert abs(range_error.mean()) < 4 * sd_r / np.sqrt(n)
     assert abs(bearing_error.mean()) < 4 * sd_b / np.sqrt(n)
     assert range_error.std() == pytest.approx(sd_r, rel=0.03)
@@ -59,10 +61,12 @@ def test_errors_and_detections_have_the_stated_statistics():
 
 def test_same_seed_same_readings_and_bad_parameters_refused():
     def run(seed):
-        tag = TagSensor({}, np.random.default_rng(seed))
+        tag = TagSensor(rng=np.random.default_rng(seed))
         return [tag.read(k * 0.04, np.zeros(3), [2.0, 1.0]) for k in range(100)]
     assert run(1) == run(1) and run(1) != run(2)
-    with pytest.raises(ValueError, match="unknown parameter.*range_sigma"):
-        TagSensor({"range_sigma": 0.1}, np.random.default_rng(0))
-    with pytest.raises(ValueError, match="rate"):
-        TagSensor({"rate": 0.0}, np.random.default_rng(0))
+    with pytest.raises(ScenarioError, match="range_sigma: unknown key"):
+        validate({"range_sigma": 0.1}, TAG, "<test>")
+    with pytest.raises(ScenarioError, match="rate: expected a value greater than 0"):
+        validate({"rate": 0.0}, TAG, "<test>")
+    with pytest.raises(ScenarioError, match="range_min: 4.5; expected below range_max"):
+        validate({"range_min": 4.5}, TAG, "<test>")

@@ -10,7 +10,6 @@ import time
 import numpy as np
 
 from scenarios import load_scenario
-from scenarios.typed import plain
 
 from .common import HALL, populated_crowd, rate, write_figures
 from .common import add_arguments  # noqa: F401  (its flags: those every benchmark takes)
@@ -30,7 +29,7 @@ def bench_laser(n_people: int, quick: bool) -> float:
     scene = Scene(crowd.walls, 0.425, n_people, parts_at(scenario.sensors.lasers[0].height))
     pose = np.array([HALL / 2, HALL / 2, 0.0])
     scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked, body_scale(crowd.id, crowd.radius))
-    laser = Laser(plain(scenario.sensors.lasers[0]), scene, np.random.default_rng(0))
+    laser = Laser(scene=scene, rng=np.random.default_rng(0), **scenario.sensors.lasers[0].params)
     return rate(lambda: laser.scan(0.0, pose), 50 if quick else 400)
 
 

@@ -19,7 +19,6 @@ import numpy as np
 
 from scenarios.format import DEPTH_CAMERA
 from scenarios.schema import validate
-from scenarios.typed import plain
 
 from .common import HALL, populated_crowd, rate, write_figures
 from .common import add_arguments  # noqa: F401  (its flags: those every benchmark takes)
@@ -45,7 +44,8 @@ def _setup(n_people: int, parts, cameras: bool):
     scale = body_scale(crowd.id, crowd.radius)
     sync = lambda: scene.sync(pose, crowd.id, crowd.pos, crowd.vel, crowd.walked, scale)  # noqa: E731
     sync()
-    lasers = [Laser(plain(p), scene, np.random.default_rng(k)) for k, p in enumerate(scenario.sensors.lasers)]
+    lasers = [Laser(scene=scene, rng=np.random.default_rng(k), **p.params)
+              for k, p in enumerate(scenario.sensors.lasers)]
     return scene, pose, sync, lasers, scenario
 
 
@@ -67,16 +67,16 @@ def per_call_ms(n_people: int, quick: bool) -> dict:
     scene, pose, sync, lasers, _ = _setup(n_people, ("torso", "head", "legs"), cameras=True)
     out["scene_sync"] = 1e3 / rate(sync, reps)
     out["laser_70cm_full_bodies"] = 1e3 / rate(lambda: lasers[0].scan(0.0, pose), reps)
-    leg = Laser(validate({"name": "leg_laser", "mount": [0.25, 0, 0], "preset": "sick_s300"}, LASER, "<bench>"),
-                scene, np.random.default_rng(0))
+    leg = Laser(scene=scene, rng=np.random.default_rng(0),
+                **validate({"name": "leg_laser", "mount": [0.25, 0, 0], "preset": "sick_s300"}, LASER, "<bench>"))
     out["laser_38cm_s300_full_bodies"] = 1e3 / rate(lambda: leg.scan(0.0, pose), reps)
-    depth = DepthCamera(DEPTH, scene, np.random.default_rng(0))
+    depth = DepthCamera(scene=scene, rng=np.random.default_rng(0), **DEPTH)
     out["depth_160x120"] = 1e3 / rate(lambda: depth.render(0.0), max(3, reps // 3))
     image = depth.render(0.0)
     out["depth_160x120_visibility"] = 1e3 / rate(lambda: depth.visibility(image), max(3, reps // 3))
-    depth640 = DepthCamera(DEPTH_640, scene, np.random.default_rng(0))
+    depth640 = DepthCamera(scene=scene, rng=np.random.default_rng(0), **DEPTH_640)
     out["depth_640x480"] = 1e3 / rate(lambda: depth640.render(0.0), max(2, reps // 10))
-    wall = WallCamera(WALL, scene)
+    wall = WallCamera(scene=scene, **WALL)
     out["wall_320x240_rgb_boxes"] = 1e3 / rate(lambda: wall.render(0.0), max(3, reps // 3))
     out["renderer"] = depth.backend
     out["people_in_wall_image"] = int(len(wall.render(0.0).ids))
@@ -95,7 +95,7 @@ def batched_rays_us(n_people: int, quick: bool) -> dict:
         p = laser.pose_in(pose)
         a = p[2] + laser.angles
         dirs.append(np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], 1))
-        origins.append(np.tile([p[0], p[1], laser.p["height"]], (laser.n_beams, 1)))
+        origins.append(np.tile([p[0], p[1], laser.height], (laser.n_beams, 1)))
     reps = 20 if quick else 200
     multiray = 1e6 / rate(lambda: [laser.scan(0.0, pose) for laser in lasers], reps)
     out = {"two_mj_multiRay_calls": multiray}
@@ -148,6 +148,7 @@ def airport_mix_ms(quick: bool, people: int = 100) -> dict:
     """The sensor mix's calls in the airport (airport_disembarkation_cameras after its warm-up and until ``people``
     are alive: its walls, its robot at the start, its front 160 x 120 depth camera without colour and its
     north-west 320 x 240 wall camera), with the first ``people`` persons alive."""
+    from pipeline.params import declared
     from scenarios import load_scenario
     from sensors.body import body_scale
     from sensors.camera import DepthCamera
@@ -165,7 +166,8 @@ def airport_mix_ms(quick: bool, people: int = 100) -> dict:
     pose = sim.robot.pose
     reps = 10 if quick else 60
     # the issue's mix: a depth camera without colour (the scenario's front camera has it), a wall camera with it
-    depth = DepthCamera(dict(sim.depth_cameras[0].p, rgb=False), sim.camera_scene, np.random.default_rng(0))
+    depth = DepthCamera(scene=sim.camera_scene, rng=np.random.default_rng(0),
+                        **{**declared(sim.depth_cameras[0]), "rgb": False})
     wall = sim.wall_cameras[0]
     sim.camera_scene.sync(pose, *person)
     image = depth.render(0.0)

@@ -13,6 +13,7 @@ import json
 import numpy as np
 
 from pipeline.frames import optical_rotation
+from pipeline.params import declared
 from scenarios.typed import Scenario, plain
 
 from ..errors import Error
@@ -87,26 +88,26 @@ def calibration(scenario: Scenario, lasers, depth_cameras, wall_cameras) -> dict
     at its height; a camera's position and the rotation whose columns are its optical axes."""
     out = {"lasers": {}, "depth_cameras": {}, "wall_cameras": {}}
     for laser in lasers:
-        p = plain(laser.p)  # the laser's parameters as plain data (a section, where a sensor keeps one)
         out["lasers"][laser.name] = {
             "parent": "base_link", "x": float(laser.mount[0]), "y": float(laser.mount[1]),
-            "yaw": float(laser.mount[2]), "z": float(p["height"]), "n_beams": int(laser.n_beams),
+            "yaw": float(laser.mount[2]), "z": float(laser.height), "n_beams": int(laser.n_beams),
             "angle_min": float(laser.angle_min), "angle_increment": float(laser.angle_increment),
-            "angle_max": float(laser.angles[-1]), "range_min": float(p.get("range_min", 0.0)),
-            "range_max": float(p["range_max"]), "rate_hz": float(p["rate"]),
-            "no_return": p.get("no_return", "nan"),
-            "model": {k: v for k, v in p.items() if k not in ("name", "mount")}}
+            "angle_max": float(laser.angles[-1]), "range_min": float(laser.range_min),
+            "range_max": float(laser.range_max), "rate_hz": float(laser.rate), "no_return": laser.no_return,
+            "model": {k: v for k, v in declared(laser).items() if k not in ("name", "mount")}}
     for kind, cameras, parent in (("depth_cameras", depth_cameras, "base_link"), ("wall_cameras", wall_cameras, "world")):
         for camera in cameras:
-            p, k = plain(camera.p), camera.intrinsics
-            entry = {"parent": parent, "position": [float(v) for v in p["position"]],
-                     "rotation": optical_rotation(p["yaw"], p["pitch"]).tolist(), "optical_axes": "x right, y down, "
-                     "z forward", "width": int(k.width), "height": int(k.height), "fovy_deg": float(k.fovy_deg),
-                     "K": camera_matrix(k.width, k.height, k.fovy_deg), "rate_hz": float(p["rate"]),
-                     "rgb": bool(p["rgb"]), "renderer": camera.backend,
+            k = camera.intrinsics
+            entry = {"parent": parent, "position": [float(v) for v in camera.position],
+                     "rotation": optical_rotation(camera.yaw, camera.pitch).tolist(),
+                     "optical_axes": "x right, y down, z forward", "width": int(k.width), "height": int(k.height),
+                     "fovy_deg": float(k.fovy_deg),
+                     "K": camera_matrix(k.width, k.height, k.fovy_deg), "rate_hz": float(camera.rate),
+                     "rgb": bool(camera.rgb), "renderer": camera.backend,
                      "segmentation": "int32 person id per pixel, -1 none"}
             if kind == "depth_cameras":
                 entry.update(depth="float32 z-depth in m along the optical axis, NaN where nothing was measured",
-                             range_min=float(p["range_min"]), range_max=float(p["range_max"]), noise=p["noise"])
+                             range_min=float(camera.range_min), range_max=float(camera.range_max),
+                             noise=camera.noise)
             out[kind][camera.name] = entry
     return out

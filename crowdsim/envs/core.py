@@ -133,7 +133,7 @@ class Episodes:
         self.noise_rng[k] = noise_rng
         self.worlds.reset(k, layout_rng)
         if self.config.task == "follow":
-            self.tags[k] = TagSensor({}, tag_rng)
+            self.tags[k] = TagSensor(rng=tag_rng)
             self._read_tag(k)
         self.start[k] = self.worlds.robot_pose[k]
         self.elapsed[k] = 0.0
@@ -153,7 +153,7 @@ class Episodes:
                 self.lasers.append(None)
                 self.software.append(RobotSoftware(build_pipeline(plain(self.scenario.pipeline), [laser_p.name]),
                                                    groups=False))
-        self.lasers[k] = Laser(plain(laser_p), self.scenes[k], rng)
+        self.lasers[k] = Laser(scene=self.scenes[k], rng=rng, **laser_p.params)
         self.software[k].reset()
         self._sense(k)
 

@@ -24,7 +24,7 @@ from gymnasium import spaces
 from pipeline.frames import inverse, rotate, rotate_covariances, rotation, transform_points
 from pipeline.types import UNKNOWN_VARIANCE
 from scenarios.typed import Scenario
-from sensors.tag import TAG_DEFAULTS
+from sensors.tag import TagSensor
 
 MAX_SPEED = 5.0  # m/s: observed person and track speeds are clipped to this per axis (people walk below 2.6)
 ROOM_DIAGONAL = float(np.hypot(14.0, 14.0))  # m, the largest room of ``layouts``
@@ -45,7 +45,7 @@ class Observer:
         parts = {"velocity": _box([-robot.max_speed, -robot.max_angular_speed],
                                   [robot.max_speed, robot.max_angular_speed], (2,))}
         if self.follow:
-            parts["tag"] = _box([0.0, -np.pi, 0.0], [TAG_DEFAULTS["range_max"], np.pi, 1.0], (3,))
+            parts["tag"] = _box([0.0, -np.pi, 0.0], [TagSensor.range_max, np.pi, 1.0], (3,))
         else:
             parts["goal"] = _box(-D, D, (2,))
         if "truth" in config.observation:
