@@ -35,7 +35,7 @@ class Recording:
         self.rec = rr.RecordingStream("crowdsim")
         self.rec.save(str(path))
         self.lasers = sim.lasers
-        self.radius = sim.robot.p.radius
+        self.radius = sim.robot.radius
         # the depth cameras' mounts on base_link as 2D poses (x, y, yaw)
         self.depth_mounts = np.array([[*c.position[:2], c.yaw] for c in sim.depth_cameras]).reshape(-1, 3)
         self.sensor_names = [laser.name for laser in sim.lasers] + [c.name for c in sim.depth_cameras]

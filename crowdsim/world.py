@@ -25,7 +25,7 @@ class World:
         self.walls = walls
         self.dt = scenario.dt
         self.crowd = Crowd(scenario, crowd_rng)
-        self.robot = Robot(scenario.robot, robot_rng)
+        self.robot = Robot.of(scenario.robot, robot_rng)
         self.ticks = 0
         self._follow_target = follow_target
         self.tagged_id = -1  # the tagged person's crowd id, once placed
@@ -41,7 +41,7 @@ class World:
     def warm_up(self, duration: float) -> None:
         """Crowd-only simulation, the robot standing at its start."""
         for _ in range(int(round(duration / self.dt))):
-            self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p.radius)
+            self.crowd.step(self.dt, self.robot.pose[:2], self.robot.radius)
         self._agents = None
 
     def step(self, v: float, omega: float) -> None:
@@ -50,7 +50,7 @@ class World:
             target, self._follow_target = self._follow_target, None
             self.tagged_id = int(self.crowd.add_walkers(np.array([target.start], float), target.route,
                                                         target.speed, agent_type=target.agent_type)[0])
-        self.crowd.step(self.dt, self.robot.pose[:2], self.robot.p.radius)
+        self.crowd.step(self.dt, self.robot.pose[:2], self.robot.radius)
         self.robot.step(v, omega, self.dt)
         self.ticks += 1
         self._agents = None
@@ -69,7 +69,7 @@ class World:
         return agents.position[row] if row < len(agents.id) and agents.id[row] == self.tagged_id else None
 
     def _check_collision(self) -> None:
-        xy, radius = self.robot.pose[:2], self.robot.p.radius
+        xy, radius = self.robot.pose[:2], self.robot.radius
         gap = np.inf
         if len(self.crowd.pos):
             gap = float((np.hypot(*(self.crowd.pos - xy).T) - self.crowd.radius).min()) - radius

@@ -25,9 +25,9 @@ def param(default: Any, doc: str, *, kind: str | None = None, min: float | None 
     """A dataclass field that is a parameter of its part: ``doc`` gives its unit and the seed section (or the
     measurement) its default comes from; its kind is its default's (int, float, str, bool, or a list: of ``item``,
     keyword arguments of ``param`` without the default and doc, or of parts of the ``parts`` slot; or a mapping of
-    names to ``item``s), or ``kind`` where the default does not tell it: a default None (the parameter may be left
-    out) or a point (``point3``), or one without a default (``REQUIRED``); a list's ``item`` may be a class whose
-    declared parameters are each item's keys."""
+    names to ``item``s; or a frozen dataclass of declared parameters, a section of its own), or ``kind`` where the
+    default does not tell it: a default None (the parameter may be left out) or a point (``point3``), or one without
+    a default (``REQUIRED``); a list's ``item`` may be a class whose declared parameters are each item's keys."""
     limits = dict(doc=doc, kind=kind, min=min, max=max, exclusive_min=exclusive_min, choices=choices, item=item,
                   parts=parts, min_items=min_items)
     if isinstance(default, (list, dict)):

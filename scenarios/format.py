@@ -20,6 +20,8 @@ from sensors.camera import DepthCamera, WallCamera
 from sensors.laser import Laser
 from sensors.tag import TagSensor
 
+from crowdsim.robot import Robot  # (the body only: it imports no more of the simulator)
+
 from .laser_presets import LASER_PRESETS
 from .schema import Field, ListOf, MapOf, Schema, ScenarioError, Typed, schema_of, slot_field, validate
 
@@ -150,16 +152,6 @@ STANDING = Schema({
     "agent_type": F("str", "adult", doc="agent type of the group's members"),
 })
 
-ODOMETRY = Schema({
-    "distance_scale_error": F("float", 0.0, min=-0.5, max=0.5,
-                              doc="relative error of the distance measured (a wheel radius off by this share)"),
-    "yaw_drift": F("float", 0.0, doc="rad/m, heading error per metre driven (wheels of unequal diameter)"),
-    "distance_noise": F("float", 0.0, min=0.0, doc="m/sqrt(m): the distance error's variance grows by this^2 per m"),
-    "yaw_noise": F("float", 0.0, min=0.0, doc="rad/sqrt(rad): heading error variance per radian turned"),
-    "yaw_noise_per_distance": F("float", 0.0, min=0.0,
-                                doc="rad/sqrt(m): heading error variance per metre driven"),
-})
-
 # The robot's local planners (pipeline/navigation/planners.py builds them; each declares its keys on its class). A
 # built-in planner also gets the robot's radius, max_speed, max_angular_speed and max_acceleration.
 PLANNER_TYPES = {name: schema_of(cls) for name, cls in PLANNERS.items()}
@@ -185,17 +177,13 @@ FOLLOW = Schema({
 # (sensors/tag.py declares them and says why)
 TAG = schema_of(TagSensor)
 
+# the robot's body declares its parameters on its class (crowdsim/robot.py: where each default comes from is said
+# there); the keys after them are the drivers' (crowdsim/drivers.py reads them)
 ROBOT = Schema({
-    "start": F("pose", required=True, doc="m, m, rad: initial pose in the world frame"),
+    **schema_of(Robot).fields,
     "route": F("points", None, doc="m, waypoints the robot drives through"),
     "loop": F("bool", True, doc="drive the route again after the last waypoint"),
-    "radius": F("float", 0.425, min=0.0, exclusive_min=True, doc="m, footprint radius (SPENCER platform ~0.85 m wide)"),
-    "max_speed": F("float", 0.6, min=0.0, doc="m/s"),
-    "max_angular_speed": F("float", 1.0, min=0.0, doc="rad/s"),
-    "max_acceleration": F("float", 0.5, min=0.0, exclusive_min=True, doc="m/s^2 (an assumption for a ~1.5 m platform)"),
-    "max_angular_acceleration": F("float", 1.5, min=0.0, exclusive_min=True, doc="rad/s^2 (an assumption)"),
     "safety_distance": F("float", 0.6, min=0.0, doc="m, stop when a laser return is this close in front"),
-    "odometry": F(ODOMETRY, doc="wheel odometry's systematic and random errors (all 0: perfect odometry)"),
     "driver": F("str", "route", choices=("route", "goals", "follow", "script"),
                 doc="what drives the robot: route (its route, stopping for what is in front), goals (the planner to "
                     "each of `goals` in turn; the run ends at the last), follow (the planner after `follow.target`), "
@@ -460,6 +448,8 @@ def reference() -> str:
                     sections.append((f"`{sub + suffix}`", sub + suffix, item))
                     text = "list of mappings" if isinstance(kind, ListOf) else "mapping of names to mappings"
                 else:
+                    if isinstance(item, ListOf):  # the script's rows
+                        item = f"lists of {item.item.kind}"
                     text = f"list of {item}" if isinstance(kind, ListOf) else f"mapping of names to {item}"
             else:
                 text = str(kind)

@@ -141,6 +141,8 @@ def _declared(default: Any, p: dict) -> Field:
         return Field(p["kind"], None if required else default, required=required, min=p["min"], max=p["max"],
                      exclusive_min=p["exclusive_min"], choices=p["choices"], doc=p["doc"],
                      optional=default is None)
+    if dataclasses.is_dataclass(default):  # a section of its own (the robot's odometry)
+        return Field(schema_of(type(default)), doc=p["doc"])
     if isinstance(default, dict):
         return Field(MapOf(_item(next(iter(default.values())), p["item"])), default, doc=p["doc"])
     if not isinstance(default, list):

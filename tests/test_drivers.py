@@ -12,7 +12,7 @@ from test_robot import params
 
 def test_route_driver_reaches_waypoints_and_stops_for_obstacles():
     p = params(route=[[5.0, 0.0], [5.0, 5.0]], loop=False)
-    robot, driver = Robot(p, np.random.default_rng(0)), RouteDriver(p)
+    robot, driver = Robot.of(p, np.random.default_rng(0)), RouteDriver(p)
     driver.reset()
     assert driver.steer(robot.pose, front_clearance=0.3) == (0.0, 0.0)  # something 0.3 m ahead: stand still
     for _ in range(2000):
@@ -26,7 +26,7 @@ def test_the_script_driver_holds_each_command_in_turn():
     # acceleration limits high enough to change speed within a step
     p = params(driver="script", script=[[2.0, 0.15, 0.0], [2.0, 0.0, 0.11]], loop=False,
                max_acceleration=100.0, max_angular_acceleration=100.0)
-    robot, driver = Robot(p, np.random.default_rng(0)), ScriptDriver(p)
+    robot, driver = Robot.of(p, np.random.default_rng(0)), ScriptDriver(p)
     dt = 0.04
     for _ in range(150):  # 6 s
         robot.step(*driver.at(robot.clock), dt)

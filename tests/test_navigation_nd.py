@@ -10,7 +10,7 @@ from pipeline.navigation.nd import NearnessDiagram
 from pipeline.navigation.planners import PLANNERS
 from pipeline.types import TrackedPersons
 
-ROBOT = {"radius": 0.425, "max_speed": 0.6, "max_angular_speed": 1.0}
+ROBOT = {"radius": 0.425, "max_speed": 0.6, "max_angular_speed": 1.0, "max_acceleration": 0.5}
 ND = NearnessDiagram(ROBOT["radius"], ROBOT["max_speed"], ROBOT["max_angular_speed"])
 GOAL = np.array([5.0, 0.0])
 

@@ -19,7 +19,7 @@ def params(**kw):
 
 def test_quarter_circle():
     # v = 1 m/s, omega = pi/2 rad/s for 1 s: a quarter circle of radius 2/pi, ending at (r, r) facing +y
-    robot = Robot(params(), np.random.default_rng(0))
+    robot = Robot.of(params(), np.random.default_rng(0))
     for _ in range(25):
         robot.step(1.0, np.pi / 2, 0.04)
     r = 2 / np.pi
@@ -28,7 +28,7 @@ def test_quarter_circle():
 
 
 def test_limits_are_applied():
-    robot = Robot(params(max_speed=0.5, max_angular_speed=1.0), np.random.default_rng(0))
+    robot = Robot.of(params(max_speed=0.5, max_angular_speed=1.0), np.random.default_rng(0))
     robot.step(3.0, 5.0, 1.0)
     assert robot.velocity == pytest.approx([0.5, 1.0])
     assert arc(0.5, 1.0, 1.0) == pytest.approx([0.5 * np.sin(1.0), 0.5 * (1 - np.cos(1.0)), 1.0])
@@ -37,7 +37,7 @@ def test_limits_are_applied():
 def test_acceleration_limits_ramp_the_speed():
     # from rest, v = 1 m/s commanded at 0.5 m/s^2 and omega = 2 rad/s at 1.5 rad/s^2: after 1 s (25 steps)
     # v = 0.5 m/s and omega = 1.5 rad/s; both then reach their commands (1 and 2) after 2 s and 1.33 s
-    robot = Robot(params(max_acceleration=0.5, max_angular_acceleration=1.5), np.random.default_rng(0))
+    robot = Robot.of(params(max_acceleration=0.5, max_angular_acceleration=1.5), np.random.default_rng(0))
     for _ in range(25):
         robot.step(1.0, 2.0, 0.04)
     assert robot.velocity == pytest.approx([0.5, 1.5])
@@ -49,7 +49,7 @@ def test_acceleration_limits_ramp_the_speed():
 
 
 def drive_straight(odometry: dict, metres: float = 10.0, seed: int = 0) -> Robot:
-    robot = Robot(params(odometry=odometry), np.random.default_rng(seed))
+    robot = Robot.of(params(odometry=odometry), np.random.default_rng(seed))
     for _ in range(round(metres / 0.04)):
         robot.step(1.0, 0.0, 0.04)
     return robot
@@ -82,8 +82,8 @@ def test_random_odometry_errors_grow_with_the_square_root_of_the_distance():
 
 def test_noisy_odometry_drifts_and_world_T_odom_tracks_it():
     start = [3.0, -1.0, 0.3]
-    robot = Robot(params(start=start, odometry={"distance_noise": 0.05, "yaw_noise": 0.05}),
-                  np.random.default_rng(0))
+    robot = Robot.of(params(start=start, odometry={"distance_noise": 0.05, "yaw_noise": 0.05}),
+                     np.random.default_rng(0))
     for _ in range(500):
         robot.step(0.8, 0.2, 0.04)
     # odom and world disagree after 20 s of noisy odometry, and world_T_odom maps one onto the other exactly
@@ -92,3 +92,20 @@ def test_noisy_odometry_drifts_and_world_T_odom_tracks_it():
     c, s = np.cos(w[2]), np.sin(w[2])
     mapped = w[:2] + np.array([[c, -s], [s, c]]) @ robot.odom_pose[:2]
     assert mapped == pytest.approx(robot.pose[:2], abs=1e-9)
+
+
+def test_a_robot_made_in_python_has_the_scenario_formats_defaults():
+    # the body declares its parameters once, on the class: Robot(start=...) and a scenario's robot section that gives
+    # only its start are the same robot (0.425 m, 0.6 m/s at 0.5 m/s^2, perfect odometry)
+    made = Robot(start=(1.0, 2.0, 0.5), rng=np.random.default_rng(0), odometry={"yaw_drift": 0.01})
+    loaded = Robot.of(typed(validate({"start": [1.0, 2.0, 0.5], "odometry": {"yaw_drift": 0.01}}, ROBOT, "<test>"),
+                            ROBOT), np.random.default_rng(0))
+    assert (made.radius, made.max_speed, made.max_acceleration) == (loaded.radius, loaded.max_speed, 0.5) == (
+        0.425, 0.6, 0.5)
+    for robot in (made, loaded):
+        for _ in range(50):  # 2 s: 0.02 m/s more each step up to 0.6 m/s at step 30, then 20 steps at 0.6 m/s
+            robot.step(1.0, 0.0, 0.04)
+    driven = 0.04 * (0.02 * sum(range(1, 31)) + 0.6 * 20)  # 0.852 m
+    assert made.pose == pytest.approx(loaded.pose) and made.pose[:2] == pytest.approx(
+        [1.0 + np.cos(0.5) * driven, 2.0 + np.sin(0.5) * driven], abs=1e-9)
+    assert made.odom_pose[2] == pytest.approx(loaded.odom_pose[2]) == pytest.approx(0.01 * made.odom_pose[0], rel=0.05)

@@ -158,7 +158,7 @@ def airport_mix_ms(quick: bool, people: int = 100) -> dict:
     sim = Simulation(load_scenario("airport_disembarkation_cameras"))
     sim.warm_up()
     while len(sim.crowd.id) < people:
-        sim.crowd.step(sim.dt, sim.robot.pose[:2], sim.robot.p.radius)
+        sim.crowd.step(sim.dt, sim.robot.pose[:2], sim.robot.radius)
     agents = sim.crowd.states()
     pick = slice(0, people)
     person = (agents.id[pick], agents.position[pick], agents.velocity[pick], agents.walked[pick],

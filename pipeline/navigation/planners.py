@@ -42,7 +42,7 @@ class Planner:
     radius: float  # m
     max_speed: float  # m/s
     max_angular_speed: float  # rad/s
-    max_acceleration: float = 0.5  # m/s^2, the braking on the way to the goal: the robot's default
+    max_acceleration: float  # m/s^2, the braking on the way to the goal
     # well inside the follower's band (1-2 m behind the person), so that the follower, not the planner, decides where
     # the robot stops
     goal_tolerance: float = param(0.1, "m, the planner stops this near its goal (well inside the follower's band; an "
