@@ -11,16 +11,22 @@ the route driver steers by), and for following the tag reading.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from pipeline.frames import compose, inverse, transform_points, wrap_angle
 from pipeline.navigation.follow import PersonFollower
-from pipeline.navigation.planners import build_planner
-from pipeline.software import Perception
+from pipeline.navigation.planners import PLANNER, build_planner
+from pipeline.params import REQUIRED, given, param
 from pipeline.types import LaserScan, TagReading
-from scenarios.typed import Section, plain
+from scenarios.schema import Field, ListOf
+from scenarios.typed import plain
+
+if TYPE_CHECKING:
+    from pipeline.software import Perception
 
 
 @dataclass
@@ -37,11 +43,21 @@ class Decision:
 Scans = list[tuple[LaserScan, np.ndarray]]
 
 
+@dataclass(kw_only=True, eq=False)
 class Driver:
-    """A driver that holds still; each kind below overrides what it does."""
+    """A driver that holds still; each kind below overrides what it does. Its declared parameters are keys of the
+    scenario's ``robot`` section, which ``of`` makes it from; ``body`` gives the robot's radius and limits (a
+    ``Robot``, or that section)."""
+
+    body: Any
+    source: str = "<scenario>"  # the scenario file, which the planner's errors name
 
     name = "none"
     finished = False  # the last goal reached: the run ends
+
+    @classmethod
+    def of(cls, robot: Mapping, source: str = "<scenario>") -> Driver:
+        return cls(body=robot, source=source, **given(cls, robot))
 
     def reset(self) -> None:
         pass
@@ -53,53 +69,68 @@ class Driver:
         return Decision()
 
 
-class RouteDriver(Driver):
+@dataclass(kw_only=True, eq=False)
+class Repeating(Driver):
+    """A driver that may start over at its end."""
+
+    loop: bool = param(True, "drive the route, or the script, again from its start after its end")
+
+
+@dataclass(kw_only=True, eq=False)
+class RouteDriver(Repeating):
     """Round the robot's route, steering on the true pose (a robot localised against its map); it stops when a
     laser return in its path (a corridor as wide as the robot) is nearer than the safety distance."""
 
+    route: list | None = param(None, "m, waypoints the robot drives through", kind="points")
+    safety_distance: float = param(0.6, "m, stop when a laser return is this close in front", min=0.0)
+
     name = "route"
 
-    def __init__(self, robot: Section, source: str = "<scenario>"):
-        self.p = robot
-        self.route = np.asarray(robot.route, float) if robot.route else np.zeros((0, 2))
+    def __post_init__(self):
+        self.waypoints = np.asarray(self.route, float) if self.route else np.zeros((0, 2))
 
     def reset(self) -> None:
         self.target = 0
 
     def command(self, world, scans: Scans) -> tuple[float, float]:
-        return self.steer(world.robot.pose, front_clearance(scans, self.p.radius))
+        return self.steer(world.robot.pose, front_clearance(scans, self.body.radius))
 
     def steer(self, pose: np.ndarray, front_clearance: float) -> tuple[float, float]:
         """(v, omega) from ``pose`` towards the next route point; none when something is nearer than the safety
         distance."""
-        if len(self.route) == 0 or self.target >= len(self.route):
+        if len(self.waypoints) == 0 or self.target >= len(self.waypoints):
             return 0.0, 0.0
-        goal = self.route[self.target]
+        goal = self.waypoints[self.target]
         if np.linalg.norm(goal - pose[:2]) < 0.5:
             self.target += 1
-            if self.target >= len(self.route):
-                if not self.p.loop:
+            if self.target >= len(self.waypoints):
+                if not self.loop:
                     return 0.0, 0.0
                 self.target = 0
-            goal = self.route[self.target]
+            goal = self.waypoints[self.target]
         d = goal - pose[:2]
         err = float(wrap_angle(np.arctan2(d[1], d[0]) - pose[2]))
         omega = 2.0 * err
-        v = self.p.max_speed * max(0.0, np.cos(err)) if abs(err) < np.pi / 3 else 0.0
-        if front_clearance < self.p.safety_distance:
+        v = self.body.max_speed * max(0.0, np.cos(err)) if abs(err) < np.pi / 3 else 0.0
+        if front_clearance < self.safety_distance:
             v = 0.0
         return v, omega
 
 
-class ScriptDriver(Driver):
+@dataclass(kw_only=True, eq=False)
+class ScriptDriver(Repeating):
     """The rows of ``script`` ([duration, v, omega], held in turn) by the time the robot has been driven, from the
     first again with ``loop``; after the last, standing."""
 
+    script: list | None = param(None, "s, m/s, rad/s: [duration, v, omega] rows the script driver holds in turn (seed "
+                                      "003's KTP: the robot still, translating, rotating or driving an arc), within "
+                                      "the speed and acceleration limits; after the last, 0 unless `loop`",
+                                kind=ListOf(Field(ListOf(Field("float"), min_items=3)), min_items=1))
+
     name = "script"
 
-    def __init__(self, robot: Section, source: str = "<scenario>"):
-        self.rows = np.asarray(robot.script, float)
-        self.loop = robot.loop
+    def __post_init__(self):
+        self.rows = np.asarray(self.script, float)
 
     def command(self, world, scans: Scans) -> tuple[float, float]:
         return self.at(world.robot.clock)
@@ -111,8 +142,15 @@ class ScriptDriver(Driver):
         return (0.0, 0.0) if k >= len(self.rows) else (float(self.rows[k, 1]), float(self.rows[k, 2]))
 
 
+@dataclass(kw_only=True, eq=False)
 class PlannerDriver(Driver):
     """A planner's command, made at each tracking cycle and held until the next."""
+
+    planner: Mapping | None = param(None, PLANNER.doc, parts=PLANNER)
+
+    def __post_init__(self):
+        self.local_planner = build_planner(plain(self.planner) if self.planner is not None else {"type": "zone"},
+                                           self.body, self.source)
 
     def reset(self) -> None:
         self._command = (0.0, 0.0)
@@ -124,46 +162,78 @@ class PlannerDriver(Driver):
         self._command = (float(command[0]), float(command[1]))
 
 
+@dataclass(kw_only=True, eq=False)
 class GoalsDriver(PlannerDriver):
-    """To each of ``robot.goals`` in turn (reached within ``goal_radius`` of the robot's centre), by the planner."""
+    """To each of ``goals`` in turn (reached within ``goal_radius`` of the robot's centre), by the planner."""
+
+    goals: list | None = param(None, "m, world: the goals the goals driver visits in order",
+                               kind=ListOf(Field("point"), min_items=1))
+    goal_radius: float = param(0.3, "m, a goal is reached with the robot's centre this near (CrowdNav: the robot "
+                                    "radius, 0.3 m)", min=0.0, exclusive_min=True)
 
     name = "goals"
 
-    def __init__(self, robot: Section, source: str):
-        self.planner = build_planner(plain(robot.planner), plain(robot), source)
-        self.goals = np.asarray(robot.goals or np.zeros((0, 2)), float).reshape(-1, 2)
-        self.radius = robot.goal_radius
+    def __post_init__(self):
+        super().__post_init__()
+        self.waypoints = np.asarray(self.goals or np.zeros((0, 2)), float).reshape(-1, 2)
 
     def reset(self) -> None:
         super().reset()
-        self.planner.reset()
+        self.local_planner.reset()
         self.goal_index = 0
         self.finished = False
 
     def cycle(self, world, scans: Scans, perception: Perception, tag: TagReading | None) -> Decision:
         robot = world.robot
-        while (self.goal_index < len(self.goals)
-               and np.hypot(*(self.goals[self.goal_index] - robot.pose[:2])) <= self.radius):
+        while (self.goal_index < len(self.waypoints)
+               and np.hypot(*(self.waypoints[self.goal_index] - robot.pose[:2])) <= self.goal_radius):
             self.goal_index += 1
-        if self.goal_index >= len(self.goals):
+        if self.goal_index >= len(self.waypoints):
             self.finished = True
             self._hold((0.0, 0.0))
             return Decision()
-        goal = self.goals[self.goal_index]
+        goal = self.waypoints[self.goal_index]
         in_odom = transform_points(inverse(robot.world_T_odom), goal[None])[0]
-        self._hold(self.planner.command(world.t, robot.odom_pose.copy(), robot.velocity.copy(),
-                                        obstacles(scans, robot.odom_pose), perception.tracks, in_odom))
+        self._hold(self.local_planner.command(world.t, robot.odom_pose.copy(), robot.velocity.copy(),
+                                              obstacles(scans, robot.odom_pose), perception.tracks, in_odom))
         return Decision(goal=goal.copy())
 
 
+@dataclass(frozen=True, kw_only=True)
+class FollowTarget:
+    """The person the robot follows, who wears the tag: they join the crowd when recording starts."""
+
+    start: tuple = param(REQUIRED, "m, world: where the target appears when recording starts (after the warm-up)",
+                         kind="point")
+    route: str = param(REQUIRED, "the route (a name under `routes`) the target walks; with sink: false, round and "
+                                 "round", kind="str")
+    speed: float = param(REQUIRED, "m/s, the target's desired speed; below robot.max_speed, or the robot could not "
+                                   "keep up", kind="float", min=0.0, exclusive_min=True)
+    agent_type: str = param("adult", "the target's agent type (its size)")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Following:
+    """Whom the follow driver follows, and how near."""
+
+    band: tuple = param([1.0, 2.0], "m, [near, far]: the robot keeps the target's centre this far away "
+                                    "(pipeline/navigation/follow.py)", kind="point")
+    target: FollowTarget | None = param(None, "the person the robot follows, who wears the tag (required)",
+                                        kind=FollowTarget)
+
+
+@dataclass(kw_only=True, eq=False)
 class FollowDriver(PlannerDriver):
-    """Behind the tagged person, within ``robot.follow.band``, by the planner (pipeline/navigation/follow.py)."""
+    """Behind the tagged person, within ``follow.band``, by the planner (pipeline/navigation/follow.py)."""
+
+    follow: Following | None = param(None, "the follow driver's target and band (required with driver: follow)",
+                                     kind=Following)
 
     name = "follow"
 
-    def __init__(self, robot: Section, source: str):
-        self.planner = build_planner(plain(robot.planner), plain(robot), source)
-        self.follower = PersonFollower(self.planner, tuple(robot.follow.band))
+    def __post_init__(self):
+        super().__post_init__()
+        self.follower = PersonFollower(self.local_planner, tuple(self.follow.band))
 
     def reset(self) -> None:
         super().reset()
@@ -176,12 +246,12 @@ class FollowDriver(PlannerDriver):
         return Decision(target_track=int(self.follower.target_track), tag=tag)
 
 
-DRIVERS: dict[str, type[Driver]] = {d.name: d for d in (RouteDriver, ScriptDriver, GoalsDriver, FollowDriver)}
+DRIVERS: dict[str, type[Driver]] = {d.name: d for d in (RouteDriver, GoalsDriver, FollowDriver, ScriptDriver)}
 
 
-def make_driver(robot: Section, source: str) -> Driver:
+def make_driver(robot: Mapping, source: str) -> Driver:
     """The driver ``robot.driver`` names, made from the validated ``robot`` section of the scenario ``source``."""
-    return DRIVERS[robot.driver](robot, source)
+    return DRIVERS[robot.driver].of(robot, source)
 
 
 def front_clearance(scans: Scans, radius: float) -> float:

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
 from pipeline.frames import compose, inverse
-from pipeline.params import REQUIRED, param
+from pipeline.params import REQUIRED, given, param
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -62,7 +62,7 @@ class Robot:
     @classmethod
     def of(cls, robot: Mapping, rng: np.random.Generator) -> Robot:
         """The body a scenario's ``robot`` section gives (its other keys are the driver's)."""
-        return cls(rng=rng, **{f.name: robot[f.name] for f in fields(cls) if "param" in f.metadata})
+        return cls(rng=rng, **given(cls, robot))
 
     @property
     def world_T_odom(self) -> np.ndarray:

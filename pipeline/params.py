@@ -14,7 +14,7 @@ import dataclasses
 import importlib
 from typing import Any, NamedTuple
 
-__all__ = ["param", "REQUIRED", "declared", "ordered", "Slot", "made"]
+__all__ = ["param", "REQUIRED", "declared", "given", "ordered", "Slot", "made"]
 
 REQUIRED = dataclasses.MISSING  # the default of a parameter that must be given (its ``kind`` named)
 
@@ -27,7 +27,9 @@ def param(default: Any, doc: str, *, kind: str | None = None, min: float | None 
     keyword arguments of ``param`` without the default and doc, or of parts of the ``parts`` slot; or a mapping of
     names to ``item``s; or a frozen dataclass of declared parameters, a section of its own), or ``kind`` where the
     default does not tell it: a default None (the parameter may be left out) or a point (``point3``), or one without
-    a default (``REQUIRED``); a list's ``item`` may be a class whose declared parameters are each item's keys."""
+    a default (``REQUIRED``), and may be a class of declared parameters (a section of its own) or a scenario kind
+    (scenarios/schema.py); a list's ``item`` may be a class whose declared parameters are each item's keys; ``parts``
+    makes it a part (a list of parts with a list default)."""
     limits = dict(doc=doc, kind=kind, min=min, max=max, exclusive_min=exclusive_min, choices=choices, item=item,
                   parts=parts, min_items=min_items)
     if isinstance(default, (list, dict)):
@@ -39,6 +41,12 @@ def declared(part: Any) -> dict[str, Any]:
     """A part's declared parameters and their values, in their order (what it records of itself: a dataset's
     calibration)."""
     return {f.name: getattr(part, f.name) for f in dataclasses.fields(part) if "param" in f.metadata}
+
+
+def given(cls: type, section: Any) -> dict[str, Any]:
+    """The values a section (a scenario's mapping) gives ``cls``'s declared parameters: its keyword arguments, where
+    the section holds other parts' keys too (the robot's section: the body's and the drivers')."""
+    return {f.name: section[f.name] for f in dataclasses.fields(cls) if "param" in f.metadata}
 
 
 def ordered(low: str, high: str, strict: bool = False):

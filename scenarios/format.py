@@ -11,7 +11,7 @@ from pipeline.detectors import DETECTORS
 from pipeline.fusion import FUSIONS
 from pipeline.groups import GROUP_STAGES
 from pipeline.map_filter import MapFilter
-from pipeline.navigation.planners import PLANNERS
+from pipeline.navigation.planners import PLANNER as PLANNER_SLOT
 from pipeline.tracking.mht import MHTParams
 from pipeline.tracking.nnt import NearestNeighbourTracker
 from pipeline.tracking.rgbd_tracker import RgbdTracker
@@ -20,10 +20,11 @@ from sensors.camera import DepthCamera, WallCamera
 from sensors.laser import Laser
 from sensors.tag import TagSensor
 
-from crowdsim.robot import Robot  # (the body only: it imports no more of the simulator)
+from crowdsim.drivers import DRIVERS  # (the robot's body and drivers only: they import no more of the simulator)
+from crowdsim.robot import Robot
 
 from .laser_presets import LASER_PRESETS
-from .schema import Field, ListOf, MapOf, Schema, ScenarioError, Typed, schema_of, slot_field, validate
+from .schema import Field, ListOf, MapOf, Schema, ScenarioError, Typed, schema_of, slot_field, slot_typed, validate
 
 F = Field
 
@@ -154,52 +155,22 @@ STANDING = Schema({
 
 # The robot's local planners (pipeline/navigation/planners.py builds them; each declares its keys on its class). A
 # built-in planner also gets the robot's radius, max_speed, max_angular_speed and max_acceleration.
-PLANNER_TYPES = {name: schema_of(cls) for name, cls in PLANNERS.items()}
-# a class of one's own: made as Class(**keys), with command(stamp, pose, velocity, obstacles, tracks, goal) and reset()
-PLANNER = Typed(PLANNER_TYPES, "zone", "planner", ("command", "reset"))
-
-FOLLOW_TARGET = Schema({
-    "start": F("point", required=True, doc="m, world: where the target appears when recording starts (after the warm-up)"),
-    "route": F("str", required=True, doc="the route (a name under `routes`) the target walks; with sink: false, round "
-                                          "and round"),
-    "speed": F("float", required=True, min=0.0, exclusive_min=True,
-               doc="m/s, the target's desired speed; below robot.max_speed, or the robot could not keep up"),
-    "agent_type": F("str", "adult", doc="the target's agent type (its size)"),
-})
-
-FOLLOW = Schema({
-    "band": F("point", [1.0, 2.0], doc="m, [near, far]: the robot keeps the target's centre this far away "
-                                       "(pipeline/navigation/follow.py)"),
-    "target": F(FOLLOW_TARGET, optional=True, doc="the person the robot follows, who wears the tag (required)"),
-})
+PLANNER = slot_typed(PLANNER_SLOT)
 
 # seed 001 Sec. 3.2: the RFID reader's coverage; the errors, detection rate and read rate are assumptions
 # (sensors/tag.py declares them and says why)
 TAG = schema_of(TagSensor)
 
-# the robot's body declares its parameters on its class (crowdsim/robot.py: where each default comes from is said
-# there); the keys after them are the drivers' (crowdsim/drivers.py reads them)
+# the robot's body and its drivers declare their parameters on their classes (crowdsim/robot.py and
+# crowdsim/drivers.py: where each default comes from is said there); a key two drivers share is declared once, on
+# their common base
 ROBOT = Schema({
     **schema_of(Robot).fields,
-    "route": F("points", None, doc="m, waypoints the robot drives through"),
-    "loop": F("bool", True, doc="drive the route again after the last waypoint"),
-    "safety_distance": F("float", 0.6, min=0.0, doc="m, stop when a laser return is this close in front"),
-    "driver": F("str", "route", choices=("route", "goals", "follow", "script"),
+    "driver": F("str", "route", choices=tuple(DRIVERS),
                 doc="what drives the robot: route (its route, stopping for what is in front), goals (the planner to "
                     "each of `goals` in turn; the run ends at the last), follow (the planner after `follow.target`), "
                     "script (the commands of `script` in turn, again from the first with `loop`)"),
-    "script": F(ListOf(F(ListOf(F("float"), min_items=3)), min_items=1), None,
-                doc="s, m/s, rad/s: [duration, v, omega] rows the script driver holds in turn (seed 003's KTP: the "
-                    "robot still, translating, rotating or driving an arc), within the speed and acceleration "
-                    "limits; after the last, 0 unless `loop`"),
-    "goals": F(ListOf(F("point"), min_items=1), None, doc="m, world: the goals the goals driver visits in order"),
-    "goal_radius": F("float", 0.3, min=0.0, exclusive_min=True,
-                     doc="m, a goal is reached with the robot's centre this near (CrowdNav: the robot radius, 0.3 m)"),
-    "planner": F(PLANNER, doc="the local planner of the goals and follow drivers (zone: seed 001 Sec. 7); a built-in "
-                              "type gets the robot's radius, speed limits and max_acceleration besides its keys, a "
-                              "class of your own is made as Class(**keys) and needs command(stamp, pose, velocity, "
-                              "obstacles, tracks, goal) -> (v, omega) and reset() (pipeline/navigation/planners.py)"),
-    "follow": F(FOLLOW, optional=True, doc="the follow driver's target and band (required with driver: follow)"),
+    **{name: field for driver in DRIVERS.values() for name, field in schema_of(driver).fields.items()},
 })
 
 # the sensors declare their parameters on their classes (where each default comes from is said there)

@@ -136,9 +136,12 @@ def _kind(value: Any) -> str:
 def _declared(default: Any, p: dict) -> Field:
     """The Field of one declared parameter (its kind that of its default, or the one it names: optional when its
     default is None, required when it has none)."""
+    if p["parts"] is not None and not isinstance(default, list):  # one part (a driver's planner)
+        return Field(slot_typed(p["parts"]), doc=p["doc"])
     if p["kind"] is not None:
         required = default is dataclasses.MISSING
-        return Field(p["kind"], None if required else default, required=required, min=p["min"], max=p["max"],
+        kind = schema_of(p["kind"]) if isinstance(p["kind"], type) else p["kind"]  # a class: its declared keys
+        return Field(kind, None if required else default, required=required, min=p["min"], max=p["max"],
                      exclusive_min=p["exclusive_min"], choices=p["choices"], doc=p["doc"],
                      optional=default is None)
     if dataclasses.is_dataclass(default):  # a section of its own (the robot's odometry)

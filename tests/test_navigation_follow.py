@@ -7,7 +7,7 @@ from pipeline.navigation.follow import PersonFollower
 from pipeline.navigation.planners import StraightPlanner
 from pipeline.types import TagReading, TrackedPersons
 
-ROBOT = {"radius": 0.425, "max_speed": 0.6, "max_angular_speed": 1.0}
+ROBOT = {"radius": 0.425, "max_speed": 0.6, "max_angular_speed": 1.0, "max_acceleration": 0.5}
 HERE = np.zeros(3)
 
 

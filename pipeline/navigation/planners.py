@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.frames import inverse, transform_points, unrotate
-from pipeline.params import param
+from pipeline.params import Slot, param
 from pipeline.types import TrackedPersons
 
 from .nd import NDResult, NearnessDiagram, drive, nearest_per_sector
@@ -306,12 +306,21 @@ PLANNERS: dict[str, type[Planner]] = {
 }
 
 
+# the planner of the goals and follow drivers (robot.planner): a built-in type, or a class of one's own made as
+# Class(**keys), with command(stamp, pose, velocity, obstacles, tracks, goal) and reset()
+PLANNER = Slot(PLANNERS, "zone", ("command", "reset"),
+               "the local planner of the goals and follow drivers (zone: seed 001 Sec. 7); a built-in type gets the "
+               "robot's radius, speed limits and max_acceleration besides its keys, a class of your own is made as "
+               "Class(**keys) and needs command(stamp, pose, velocity, obstacles, tracks, goal) -> (v, omega) and "
+               "reset() (pipeline/navigation/planners.py)", "planner")
+
 ROBOT_KEYS = ("radius", "max_speed", "max_angular_speed", "max_acceleration")
 
 
-def build_planner(spec: dict, robot: dict, source: str = "<scenario>") -> Planner:
+def build_planner(spec: dict, robot, source: str = "<scenario>") -> Planner:
     """The planner a validated ``robot.planner`` section names (``type`` and its keys): a built-in type, given the
-    robot's radius, speed limits and acceleration (``robot``: the scenario's ``robot`` section) besides its keys, or
+    robot's radius, speed limits and acceleration (``robot``: the robot's body, or the scenario's ``robot`` section)
+    besides its keys, or
     a class of one's own, made as ``Class(**keys)`` like the pipeline's parts (pipeline/assemble.py: what its
     constructor raises, and a command that is no (v, omega), are one error naming ``source``'s key)."""
     # here, not at the top: assemble imports the scenario format, which imports this module for the planners' keys
@@ -319,6 +328,6 @@ def build_planner(spec: dict, robot: dict, source: str = "<scenario>") -> Planne
 
     params = {key: value for key, value in spec.items() if key != "type"}
     if spec["type"] in PLANNERS:
-        return PLANNERS[spec["type"]](**{key: robot[key] for key in ROBOT_KEYS}, **params)
+        return PLANNERS[spec["type"]](**{key: getattr(robot, key) for key in ROBOT_KEYS}, **params)
     return check_outputs(make_user_part(spec["type"], params, source, "robot.planner"), "planner", source,
                          "robot.planner")
