@@ -12,8 +12,10 @@ import gc
 
 def release_memory() -> None:
     """Collect what is no longer referenced and give the freed heap back to the system (glibc; elsewhere only the
-    collection)."""
-    gc.collect()
+    collection). The collection walks the two young generations, where a stage's own garbage is: a full one walks
+    every object of the imported libraries too (0.1 s each time, ../shared/briefs/profile.md), and a stage's arrays
+    are freed by their reference counts anyway."""
+    gc.collect(1)
     try:
         ctypes.CDLL("libc.so.6").malloc_trim(0)
     except (OSError, AttributeError):  # not glibc: nothing to give back this way

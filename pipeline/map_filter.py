@@ -13,13 +13,27 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import fftconvolve
 
 from scenarios.geometry import inside_polygon, wall_segments
 
 from .frames import transform_points
 from .params import param
 from .types import DetectedPersons
+
+
+def disc_counts(grid: np.ndarray, half_widths: np.ndarray) -> np.ndarray:
+    """For every cell of ``grid`` [rows, cols], how many cells are set within the disc round it whose row dy = -r..r
+    spans ``half_widths[dy + r]`` cells either side (off the grid: none), counted exactly: one prefix sum along each
+    row of the grid, then per row of the disc the difference of two of them."""
+    r = len(half_widths) // 2
+    rows, cols = grid.shape
+    padded = np.zeros((rows + 2 * r, cols + 2 * r + 1), np.int64)  # r rows above and below, r + 1 columns before
+    padded[r:r + rows, r + 1:r + 1 + cols] = grid
+    prefix = np.cumsum(padded, axis=1)
+    out = np.zeros((rows, cols), np.int64)
+    for k, w in enumerate(half_widths):  # cells x - w .. x + w of row y + k - r
+        out += prefix[k:k + rows, r + 1 + w:r + 1 + w + cols] - prefix[k:k + rows, r - w:r - w + cols]
+    return out
 
 
 def occupancy_grid(walls: list, obstacles: list, resolution: float, margin: float) -> tuple[np.ndarray, np.ndarray]:
@@ -75,8 +89,7 @@ class MapFilter:
         r = int(np.floor(self.inflation / self.resolution + 1e-9))
         offsets = np.arange(-r, r + 1) * self.resolution
         disc = (np.hypot(*np.meshgrid(offsets, offsets)) <= self.inflation + 1e-9).astype(float)
-        # occupied cells within the circle of each cell, counted exactly (rounded off the FFT's float error)
-        near = np.rint(fftconvolve(self.occupied.astype(float), disc, mode="same"))
+        near = disc_counts(self.occupied, disc.sum(axis=1).astype(int) // 2)
         self.blocked = near > self.max_occupied * disc.sum() + 1e-9
 
     def keep(self, xy_world: np.ndarray) -> np.ndarray:

@@ -42,10 +42,16 @@ class LaserScan:
         return np.isfinite(self.ranges) & (self.ranges < self.range_max)
 
     def points(self) -> np.ndarray:
-        """Beam endpoints [n, 2] in the sensor frame (NaN rows for no return)."""
-        a = self.angles
-        r = np.where(self.returned, self.ranges, np.nan)
-        return np.stack([r * np.cos(a), r * np.sin(a)], axis=1)
+        """Beam endpoints [n, 2] in the sensor frame (NaN rows for no return): made at the first call and kept, read
+        only (the detector, the driver's clearance and the ground truth each ask; a scan is not changed once made)."""
+        points = self.__dict__.get("_points")
+        if points is None:
+            a = self.angles
+            r = np.where(self.returned, self.ranges, np.nan)
+            points = np.stack([r * np.cos(a), r * np.sin(a)], axis=1)
+            points.flags.writeable = False
+            self._points = points
+        return points
 
 
 @dataclass

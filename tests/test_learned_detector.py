@@ -13,7 +13,7 @@ from test_laser_detector import ANGLE_MIN, INC, N_BEAMS, circle_ranges, line_ran
 from crowdsim.cli import main
 from crowdsim.experiments.train_detector import collect, forest_from_sklearn, label_segments, stumps_from_sklearn
 from crowdsim.loop import Simulation
-from pipeline.detectors.learned_segments import LearnedSegmentDetector, SegmentModel, load_model
+from pipeline.detectors.learned_segments import Forest, LearnedSegmentDetector, SegmentModel, load_model
 from pipeline.detectors.segment_features import (FEATURE_NAMES, MAX_RADIUS, Segments, jump_segments,
                                                  segment_features)
 from pipeline.types import UNKNOWN_VARIANCE, LaserScan
@@ -49,6 +49,21 @@ def test_an_arc_of_a_circle_has_zero_circularity_and_its_exact_radius():
     assert f["boundary_regularity"][0] == pytest.approx(0.0, abs=1e-12)
     assert f["width"][0] == pytest.approx(2 * 0.25 * np.sin(1.0), rel=1e-12)  # chord over 2 rad
     assert f["n_points"][0] == 9
+
+
+def test_a_long_arc_and_its_neighbours_by_hand():
+    # 300 points (more than the 128 of one pairwise block) 0.01 rad apart on the circle of radius 2 about (6, 0),
+    # between two 3-point segments: the fit is still exact, the steps all 2 * 2 sin(0.005), and the jumps are the
+    # gaps to the neighbours' nearest points
+    a = np.pi + (np.arange(300) - 149.5) * 0.01
+    arc = np.column_stack([6 + 2 * np.cos(a), 2 * np.sin(a)])
+    before, after = arc[0] + [[0.0, -1.0], [0.0, -0.9], [0.0, -0.8]], arc[-1] + [[0.0, 0.5], [0.0, 0.6], [0.0, 0.7]]
+    f = features(before, arc, after)
+    assert f["radius"][1] == pytest.approx(2.0, rel=1e-9) and f["circularity"][1] == pytest.approx(0.0, abs=1e-12)
+    assert f["boundary_length"][1] == pytest.approx(299 * 4 * np.sin(0.005), rel=1e-12)
+    assert f["mean_curvature"][1] == pytest.approx(0.5, rel=1e-6)
+    assert (f["jump_prev"][1], f["jump_next"][1]) == (pytest.approx(0.8), pytest.approx(0.5))
+    assert f["n_points"].tolist() == [3, 300, 3]
 
 
 def test_points_on_a_line_have_zero_linearity_and_no_circle():
@@ -179,6 +194,18 @@ def test_shipped_forest_equals_scikit_learns_random_forest(tmp_path, toy_data):
     assert (model.threshold, model.offset, model.per_width) == (0.4, 0.1, 0.02)
     np.testing.assert_allclose(model.classifier.predict_proba(new), rf.predict_proba(new)[:, 1], rtol=0, atol=1e-12)
     np.testing.assert_allclose(model.classifier.predict_proba(x), rf.predict_proba(x)[:, 1], rtol=0, atol=1e-12)
+
+
+def test_a_two_tree_forest_by_hand():
+    # tree 0 (nodes 0-2): x0 <= 0.5 ? 0.2 : 0.8; tree 1 (nodes 3-7): x1 <= 1 ? (x0 <= 2 ? 0.0 : 1.0) : 0.6; the
+    # probability is the trees' mean; a NaN feature goes left, as no comparison with it holds
+    forest = Forest(feature=np.array([0, -2, -2, 1, 0, -2, -2, -2]),
+                    threshold=np.array([0.5, -2, -2, 1.0, 2.0, -2, -2, -2]),
+                    left=np.array([1, -1, -1, 4, 5, -1, -1, -1]), right=np.array([2, -1, -1, 7, 6, -1, -1, -1]),
+                    value=np.array([0, 0.2, 0.8, 0, 0, 0.0, 1.0, 0.6]), roots=np.array([0, 3]))
+    x = np.array([[0.4, 2.0], [3.0, 0.5], [np.nan, 0.0], [0.5, 1.0]])
+    assert forest.predict_proba(x).tolist() == [(0.2 + 0.6) / 2, (0.8 + 1.0) / 2, (0.2 + 0.0) / 2, (0.2 + 0.0) / 2]
+    assert forest.predict_proba(np.zeros((0, 2))).shape == (0,)
 
 
 def test_a_wrong_model_is_one_clear_error(tmp_path):

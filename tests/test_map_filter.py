@@ -6,7 +6,7 @@ import pytest
 from conftest import room
 
 from crowdsim.loop import Simulation
-from pipeline.map_filter import MapFilter, occupancy_grid
+from pipeline.map_filter import MapFilter, disc_counts, occupancy_grid
 from pipeline.types import DetectedPersons
 from scenarios import scenario_from_dict
 from scenarios.geometry import closest_on_segments, wall_segments
@@ -123,3 +123,15 @@ def test_the_loop_drops_each_detectors_detections_on_the_map_before_fusion(map_f
         np.testing.assert_allclose(np.sort(frame.detections.position[:, :2], axis=0), np.sort(expected, axis=0),
                                    atol=1e-9)
         assert len(frame.detector_outputs["front_laser"]) == (0 if map_filter is not None else 1)
+
+
+def test_disc_counts_by_hand():
+    # a plus-shaped disc (half widths 0, 1, 0) round each cell of a 3 x 4 grid with cells (0, 0) and (1, 2) set:
+    # a cell counts the set cells among itself and its four neighbours; off the grid counts nothing
+    grid = np.zeros((3, 4), bool)
+    grid[0, 0] = grid[1, 2] = True
+    assert disc_counts(grid, np.array([0, 1, 0])).tolist() == [[1, 1, 1, 0],
+                                                               [1, 1, 1, 1],
+                                                               [0, 0, 1, 0]]
+    # a 3 x 3 square (half widths 1, 1, 1): the centre cell of the set pair's neighbourhood counts both
+    assert disc_counts(grid, np.array([1, 1, 1]))[1, 1] == 2

@@ -131,20 +131,20 @@ class Crowd:
 
     # -- forces -------------------------------------------------------------------------------------------------
 
-    def desired_direction(self) -> tuple[np.ndarray, np.ndarray]:
+    def desired_direction(self, holding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Unit vectors towards the current goals (or along the wall for walkers escaping one, see
         ``behaviours.Escapes``) and the desired speeds (standing people slow to their spot; people waiting at a
         waypoint want to stand wherever they stopped, so a group gathering there stands round it, not on its
-        centre)."""
+        centre). ``holding``: ``self.holding``, made once a step."""
         to_goal = self.goal - self.pos
         dist = np.linalg.norm(to_goal, axis=1)
         e = to_goal / np.maximum(dist, 1e-9)[:, None]
-        speed = np.where(self.holding, self.v0 * np.clip(dist / ARRIVAL_RADIUS, 0.0, 1.0), self.v0)
+        speed = np.where(holding, self.v0 * np.clip(dist / ARRIVAL_RADIUS, 0.0, 1.0), self.v0)
         speed[self.waiting] = 0.0
         self.escapes.steer(self, e)
         return e, speed
 
-    def interaction_forces(self, e: np.ndarray) -> np.ndarray:
+    def interaction_forces(self, e: np.ndarray, holding: np.ndarray) -> np.ndarray:
         """The configured agent-agent force over neighbour pairs from a k-d tree (O(N log N), not O(N^2))."""
         p = self.p
         n = len(self.pos)
@@ -152,18 +152,18 @@ class Crowd:
         tree = cKDTree(self.pos, balanced_tree=False, compact_nodes=False) if n > 1 else None
         pairs = (tree.query_pairs(p.interaction_range, output_type="ndarray") if n > 1
                  else np.zeros((0, 2), np.int64))
-        return forces.pair_forces(p, self.pos, self.vel, e, pairs, walking=~self.holding)
+        return forces.pair_forces(p, self.pos, self.vel, e, pairs, walking=~holding)
 
-    def acceleration(self, e: np.ndarray, speed: np.ndarray, robot_pos: np.ndarray | None,
+    def acceleration(self, e: np.ndarray, speed: np.ndarray, holding: np.ndarray, robot_pos: np.ndarray | None,
                      robot_radius: float) -> np.ndarray:
         """The sum of every force term on every agent, walking in directions ``e`` at desired ``speed``."""
         p = self.p
         acc = forces.desired_force(e, speed, self.vel, p.relaxation_time)
-        acc += self.interaction_forces(e)
+        acc += self.interaction_forces(e, holding)
         acc += forces.wall_force(self.pos, self.radius, e, self.walls, p.wall_strength, p.wall_range,
                                  p.wall_interaction_range, p.fov_deg, p.out_of_view_weight
                                  ) * self.escapes.repelled_by_walls(self)[:, None]
-        walking_groups = np.where(self.holding, -1, self.group)
+        walking_groups = np.where(holding, -1, self.group)
         acc += forces.group_forces(self.pos, self.vel, e, self.radius, walking_groups, p.group_gaze,
                                    p.group_coherence, p.group_repulsion)
         if robot_pos is not None:
@@ -180,13 +180,14 @@ class Crowd:
         act on where they now are."""
         self.sources.update(self)
         if len(self.pos):
-            e, speed = self.desired_direction()
-            vel = self.vel + self.acceleration(e, speed, robot_pos, robot_radius) * dt
+            holding = self.holding  # nobody starts or stops holding a spot before the behaviours act
+            e, speed = self.desired_direction(holding)
+            vel = self.vel + self.acceleration(e, speed, holding, robot_pos, robot_radius) * dt
             # The field-of-view weighting makes the forces from those ahead outweigh those from behind, so in a
             # jam the net force points backwards and a whole crowd would walk backwards. Pressure from ahead
             # stops a walker; it does not make them walk backwards (contacts still push bodies physically).
             along = np.einsum("ij,ij->i", vel, e)
-            back = ~self.holding & (along < 0)
+            back = ~holding & (along < 0)
             vel[back] -= along[back, None] * e[back]
             vmax = self.p.max_speed_factor * self.v0
             s = np.linalg.norm(vel, axis=1)

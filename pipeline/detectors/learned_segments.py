@@ -9,7 +9,8 @@ being a person: the detection's confidence. Segments at or above ``threshold`` a
 shipped in ``models/``: AdaBoost over decision stumps (Arras et al.'s boosting) and a random forest of 15 trees of
 depth at most 10 (what seed 000's "Taking a closer look" Sec. III-A found best). Both were trained with scikit-learn by
 ``crowdsim experiment train-detector`` (crowdsim/experiments/train_detector.py says on which data) and are stored as
-plain arrays, so this module needs numpy only, and no pickle: the stumps as JSON, the forest's nodes as an .npz.
+plain arrays, so running them needs no scikit-learn and no pickle: the stumps as JSON, the forest's nodes as an .npz
+(walked by a compiled loop, pipeline/compiled.py).
 
 A model file also holds the detection threshold chosen on validation seeds (peak F1 at 0.5 m) and the position
 model measured on training data: the centre lies ``offset + per_width * width`` behind the segment's centroid along
@@ -18,13 +19,13 @@ the ray (``laser_segments`` uses offset 0 and pi/8 per metre of width, the geome
 
 from __future__ import annotations
 
-import functools
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from pipeline.compiled import kernel, pairwise
 from pipeline.params import param
 from pipeline.types import DetectedPersons, LaserScan
 
@@ -74,30 +75,25 @@ class Forest:
     roots: np.ndarray
 
     def predict_proba(self, x: np.ndarray) -> np.ndarray:
-        """P(person) of each row of ``x`` [n, 13]: all rows down all trees at once, one level per step, as many
-        steps as the deepest tree is deep (a leaf leads to itself)."""
-        x = np.asarray(x, np.float32)
-        feature, threshold, children, depth = self._walk
-        node = np.tile(self.roots, len(x))
-        flat_x = x.ravel()
-        base = np.repeat(np.arange(len(x)) * x.shape[1], len(self.roots)) if len(x) else np.zeros(0, np.int64)
-        for _ in range(depth):
-            node = children[2 * node + (flat_x[base + feature[node]] > threshold[node])]
-        return self.value[node].reshape(len(x), len(self.roots)).mean(axis=1)
+        """P(person) of each row of ``x`` [n, 13]."""
+        out = np.empty(len(x))
+        _forest(np.asarray(x, np.float32), self.feature, self.threshold, self.left, self.right, self.value,
+                self.roots, out)
+        return out
 
-    @functools.cached_property
-    def _walk(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-        """The nodes' features (0 at leaves), thresholds, children interleaved (2i: left, 2i + 1: right; a leaf's
-        both itself) and the deepest tree's depth."""
-        leaf = self.left < 0
-        nodes = np.arange(len(self.left))
-        children = np.column_stack([np.where(leaf, nodes, self.left), np.where(leaf, nodes, self.right)]).ravel()
-        depth, level = 0, self.roots.copy()
-        while len(level):
-            level = np.concatenate([self.left[level], self.right[level]])
-            level = level[level >= 0]
-            depth += 1
-        return np.where(leaf, 0, self.feature), self.threshold, children, depth - 1
+
+@kernel
+def _forest(x, feature, threshold, left, right, value, roots, out):
+    """Each row of ``x`` down every tree to its leaf (right where the feature is above the threshold, as
+    scikit-learn's trees go; left for NaN); ``out`` the leaves' mean, summed as numpy's ``mean`` sums."""
+    leaves = np.empty(len(roots))
+    for r in range(len(x)):
+        for t in range(len(roots)):
+            node = roots[t]
+            while left[node] >= 0:
+                node = right[node] if x[r, feature[node]] > threshold[node] else left[node]
+            leaves[t] = value[node]
+        out[r] = pairwise(leaves, 0, len(roots)) / len(roots)
 
 
 @dataclass(frozen=True)

@@ -29,15 +29,18 @@ frame, in beam order), mean x_bar:
 13. ``mean_angular_difference``: the mean over the inner points of the angle beta_j in [0, pi] between the vectors
     x_{j-1} -> x_j and x_j -> x_{j+1} (0 on a line; 0 below 3 points).
 
-Everything is computed on arrays over all returns of the scan, reduced per segment with ``np.add.reduceat``.
+One compiled pass per segment computes them all (pipeline/compiled.py: per-call overhead made numpy's version cost
+564 us a cycle).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.compiled import kernel, segment_sum
 from pipeline.types import LaserScan
 
 FEATURE_NAMES = ("n_points", "std", "median_deviation", "jump_prev", "jump_next", "width", "linearity",
@@ -81,76 +84,100 @@ def jump_segments(scan: LaserScan, jump_distance: float) -> Segments:
     return Segments(p, idx, label, start, np.diff(np.append(start, len(p))))
 
 
-def _segment_median(values: np.ndarray, seg: Segments) -> np.ndarray:
-    """Per segment the median of ``values`` [k] (the mean of the two middle ones for an even count)."""
-    order = np.lexsort((values, seg.label))
-    s = values[order]
-    return (s[seg.start + (seg.count - 1) // 2] + s[seg.start + seg.count // 2]) / 2
-
-
 def segment_features(seg: Segments, range_max: float) -> np.ndarray:
     """The 13 features (module docstring, ``FEATURE_NAMES`` order) of every segment: [m, 13] float64."""
-    m = len(seg.start)
-    if m == 0:
-        return np.zeros((0, len(FEATURE_NAMES)))
-    p, lab, start, n = seg.points, seg.label, seg.start, seg.count
-    end = start + n - 1
-    nf = n.astype(float)
+    out = np.empty((len(seg.start), len(FEATURE_NAMES)))
+    _features(np.ascontiguousarray(seg.points, np.float64), seg.start, seg.count, float(range_max), out)
+    return out
 
-    def sums(v: np.ndarray) -> np.ndarray:
-        return np.add.reduceat(v, start, axis=0)
 
-    mean = sums(p) / nf[:, None]
-    u = p - mean[lab]  # centred coordinates
-    suu, svv, suv = sums(u[:, 0] ** 2), sums(u[:, 1] ** 2), sums(u[:, 0] * u[:, 1])
-    std = np.sqrt((suu + svv) / np.maximum(nf - 1, 1))
-    med = np.stack([_segment_median(p[:, 0], seg), _segment_median(p[:, 1], seg)], axis=1)
-    median_dev = sums(np.linalg.norm(p - med[lab], axis=1)) / nf
+@kernel
+def _distance(p, i, j):
+    """|p_i - p_j|."""
+    dx, dy = p[i, 0] - p[j, 0], p[i, 1] - p[j, 1]
+    return math.sqrt(dx * dx + dy * dy)
 
-    jump_prev = np.full(m, float(range_max))
-    jump_next = np.full(m, float(range_max))
-    jump_prev[1:] = jump_next[:-1] = np.linalg.norm(p[start[1:]] - p[end[:-1]], axis=1)
-    width = np.linalg.norm(p[end] - p[start], axis=1)
 
-    # orthogonal regression line: the residual is the scatter matrix's smaller eigenvalue
-    half_trace = (suu + svv) / 2
-    linearity = np.maximum(half_trace - np.hypot((suu - svv) / 2, suv), 0.0)
+@kernel
+def _median(values, lo, n, scratch):
+    """The median of ``values[lo:lo + n]`` (the mean of the two middle ones for an even n), sorted in ``scratch``:
+    by insertion for the few points of a person's segment, where a general sort's set-up costs more."""
+    if n > 32:
+        scratch[:n] = values[lo:lo + n]
+        scratch[:n].sort()
+    else:
+        for i in range(n):
+            v, j = values[lo + i], i
+            while j > 0 and scratch[j - 1] > v:
+                scratch[j] = scratch[j - 1]
+                j -= 1
+            scratch[j] = v
+    return (scratch[(n - 1) // 2] + scratch[n // 2]) / 2
 
-    # algebraic circle fit on centred points: 2 [[suu, suv], [suv, svv]] (a, b) = (sum u z, sum v z), z = |u|^2
-    # gives the centre offset (a, b) and r^2 = a^2 + b^2 + mean z
-    z = (u ** 2).sum(axis=1)
-    suz, svz = sums(u[:, 0] * z), sums(u[:, 1] * z)
-    det = suu * svv - suv ** 2
-    circle = (det > 1e-12 * (suu + svv) ** 2) & (n >= 3)
-    d = np.where(circle, det, 1.0)
-    a = np.where(circle, (svv * suz - suv * svz) / (2 * d), 0.0)
-    b = np.where(circle, (suu * svz - suv * suz) / (2 * d), 0.0)
-    radius = np.where(circle, np.sqrt(a ** 2 + b ** 2 + sums(z) / nf), MAX_RADIUS)
-    residual = radius[lab] - np.linalg.norm(u - np.stack([a, b], axis=1)[lab], axis=1)
-    circularity = np.where(circle, sums(residual ** 2), linearity)
-    radius = np.minimum(radius, MAX_RADIUS)
 
-    # boundary: steps between consecutive points of the same segment
-    step = np.linalg.norm(np.diff(p, axis=0), axis=1)
-    inside = lab[1:] == lab[:-1]
-    step_sum = np.bincount(lab[1:][inside], step[inside], minlength=m)
-    step_mean = step_sum / np.maximum(nf - 1, 1)
-    step_sq = np.bincount(lab[1:][inside], (step[inside] - step_mean[lab[1:][inside]]) ** 2, minlength=m)
-    regularity = np.where(n >= 3, np.sqrt(step_sq / np.maximum(nf - 2, 1)), 0.0)
-
-    # inner points x_j (neighbours in the same segment): triangle curvature and turning angle
-    j = np.flatnonzero(inside[:-1] & inside[1:]) + 1
-    da, db = step[j - 1], step[j]
-    dc = np.linalg.norm(p[j + 1] - p[j - 1], axis=1)
-    e0, e1 = p[j] - p[j - 1], p[j + 1] - p[j]
-    cross = e0[:, 0] * e1[:, 1] - e0[:, 1] * e1[:, 0]
-    dot = (e0 * e1).sum(axis=1)
-    prod = da * db * dc
-    curvature = np.divide(2 * np.abs(cross), prod, out=np.zeros_like(prod), where=prod > 0)  # 4 A, A = |cross| / 2
-    angle = np.arctan2(np.abs(cross), dot)
-    inner = np.maximum(nf - 2, 1)
-    mean_curvature = np.bincount(lab[j], curvature, minlength=m) / inner
-    mean_angle = np.bincount(lab[j], angle, minlength=m) / inner
-
-    return np.stack([nf, std, median_dev, jump_prev, jump_next, width, linearity, circularity, radius, step_sum,
-                     regularity, mean_curvature, mean_angle], axis=1)
+@kernel
+def _features(p, start, count, range_max, out):
+    """``segment_features`` into ``out`` [m, 13]. The sums over a segment's points are numpy's pairwise sums
+    (``segment_sum``), as the classifiers' training features were computed; the boundary's and the inner points'
+    are running sums (as ``np.bincount`` gave them)."""
+    x, y = p[:, 0].copy(), p[:, 1].copy()
+    terms = np.empty((8, len(p)))  # per point: u^2, v^2, u v, u z, v z, z, |x - median|, circle residual^2
+    xs, ys = np.empty(len(p)), np.empty(len(p))  # a segment's coordinates, sorted for the median
+    for s in range(len(start)):
+        a, n = start[s], count[s]
+        e, nf = a + n - 1, float(n)
+        mx, my = segment_sum(x, a, n) / nf, segment_sum(y, a, n) / nf
+        # centred second and third moments: the spread, the regression line and the circle fit
+        for i in range(a, a + n):
+            u, v = x[i] - mx, y[i] - my
+            z = u * u + v * v
+            terms[0, i], terms[1, i], terms[2, i], terms[3, i], terms[4, i], terms[5, i] = u * u, v * v, u * v, u * z, \
+                v * z, z
+        suu, svv, suv = segment_sum(terms[0], a, n), segment_sum(terms[1], a, n), segment_sum(terms[2], a, n)
+        suz, svz, sz = segment_sum(terms[3], a, n), segment_sum(terms[4], a, n), segment_sum(terms[5], a, n)
+        medx, medy = _median(x, a, n, xs), _median(y, a, n, ys)
+        for i in range(a, a + n):
+            dx, dy = x[i] - medx, y[i] - medy
+            terms[6, i] = math.sqrt(dx * dx + dy * dy)
+        # orthogonal regression line: the residual is the scatter matrix's smaller eigenvalue
+        linearity = max((suu + svv) / 2 - math.hypot((suu - svv) / 2, suv), 0.0)
+        # algebraic circle fit on centred points: 2 [[suu, suv], [suv, svv]] (ca, cb) = (sum u z, sum v z), z = |u|^2,
+        # gives the centre offset (ca, cb) and r^2 = ca^2 + cb^2 + mean z
+        det = suu * svv - suv * suv
+        if det > 1e-12 * (suu + svv) ** 2 and n >= 3:
+            ca, cb = (svv * suz - suv * svz) / (2 * det), (suu * svz - suv * suz) / (2 * det)
+            radius = math.sqrt(ca * ca + cb * cb + sz / nf)
+            for i in range(a, a + n):
+                dx, dy = x[i] - mx - ca, y[i] - my - cb
+                r = radius - math.sqrt(dx * dx + dy * dy)
+                terms[7, i] = r * r
+            circularity = segment_sum(terms[7], a, n)
+        else:
+            radius, circularity = MAX_RADIUS, linearity
+        # boundary: steps between consecutive points
+        boundary = 0.0
+        for i in range(a + 1, a + n):
+            boundary += _distance(p, i, i - 1)
+        step_mean = boundary / max(nf - 1.0, 1.0)
+        spread = 0.0
+        for i in range(a + 1, a + n):
+            d = _distance(p, i, i - 1) - step_mean
+            spread += d * d
+        # inner points x_j: triangle curvature 4 A / (d_a d_b d_c), A = |cross| / 2, and turning angle
+        curvature = angle = 0.0
+        for j in range(a + 1, e):
+            e0x, e0y = x[j] - x[j - 1], y[j] - y[j - 1]
+            e1x, e1y = x[j + 1] - x[j], y[j + 1] - y[j]
+            cross = e0x * e1y - e0y * e1x
+            prod = _distance(p, j, j - 1) * _distance(p, j + 1, j) * _distance(p, j + 1, j - 1)
+            if prod > 0:
+                curvature += 2 * abs(cross) / prod
+            angle += math.atan2(abs(cross), e0x * e1x + e0y * e1y)
+        inner = max(nf - 2.0, 1.0)
+        row = out[s]
+        row[0], row[1], row[2] = nf, math.sqrt((suu + svv) / max(nf - 1.0, 1.0)), segment_sum(terms[6], a, n) / nf
+        row[3] = range_max if s == 0 else _distance(p, a, a - 1)
+        row[4] = range_max if s == len(start) - 1 else _distance(p, e + 1, e)
+        row[5], row[6], row[7], row[8] = _distance(p, e, a), linearity, circularity, min(radius, MAX_RADIUS)
+        row[9], row[11], row[12] = boundary, curvature / inner, angle / inner
+        row[10] = math.sqrt(spread / max(nf - 2.0, 1.0)) if n >= 3 else 0.0
