@@ -1,6 +1,6 @@
 """The benchmarks of ``crowdsim bench``: the hot parts and the whole loop (``parts``), the crowd beside JuPedSim
 (``sim``), every sensor (``sensors``), the evaluation (``eval``), the gym environments (``env``) and dataset
-generation (``dataset``). Each is a subcommand whose module declares its own flags and runs it
+generation (``dataset``), and the speed figures beside an older checkout's (``speed``). Each is a subcommand whose module declares its own flags and runs it
 (``crowdsim.cli.Command``); ``BENCHMARKS`` gathers them."""
 
 from ..cli import Command
@@ -14,4 +14,6 @@ BENCHMARKS = (
     Command("eval", "the evaluation's frames/s on 5000 frames of 80 persons", "crowdsim.bench.eval"),
     Command("env", "environment steps/s, one env and the vector envs", "crowdsim.bench.env"),
     Command("dataset", "a dataset episode's frames/s and bytes per frame", "crowdsim.bench.dataset"),
+    Command("speed", "the loop's, the crowd's and the environments' speed in CPU time, side by side with an older "
+                     "checkout's (--against DIR)", "crowdsim.bench.speed"),
 )

@@ -77,11 +77,22 @@ def jump_segments(scan: LaserScan, jump_distance: float) -> Segments:
     if len(p) == 0:
         empty = np.zeros(0, np.int64)
         return Segments(p, idx, empty, empty, empty)
-    gap = np.linalg.norm(np.diff(p, axis=0), axis=1) > jump_distance
-    gap |= np.diff(idx) > 1
-    label = np.concatenate([[0], np.cumsum(gap)])
-    start = np.flatnonzero(np.concatenate([[True], gap]))
-    return Segments(p, idx, label, start, np.diff(np.append(start, len(p))))
+    label, start = np.empty(len(p), np.int64), np.empty(len(p), np.int64)
+    m = _cut(p, idx, float(jump_distance), label, start)
+    return Segments(p, idx, label, start[:m], np.diff(np.append(start[:m], len(p))))
+
+
+@kernel
+def _cut(p, beam, jump_distance, label, start):
+    """Each return's segment ``label`` and each segment's first return (``start``); the number of segments."""
+    m = 1
+    label[0], start[0] = 0, 0
+    for i in range(1, len(p)):
+        if _distance(p, i, i - 1) > jump_distance or beam[i] - beam[i - 1] > 1:
+            start[m] = i
+            m += 1
+        label[i] = m - 1
+    return m
 
 
 def segment_features(seg: Segments, range_max: float) -> np.ndarray:

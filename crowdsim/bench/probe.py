@@ -1,0 +1,111 @@
+"""One speed figure of one source tree, measured in a process of its own: ``python probe.py TREE FIGURE [--quick]``.
+
+Run by path (``crowdsim bench speed`` starts it), so that the simulator it imports is TREE's: this tree's or an older
+checkout's, measured by the same code. It uses only what both have long had (``load_scenario``, ``Simulation``,
+``crowdsim.bench.sim.our_crowd``, the registered gym environments) and prints its figure as one line of JSON. Times
+are CPU times of this process (``process_time``), which another job on the machine slows far less than wall time.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+import time
+
+
+def loop(scenario: str, duration: float) -> dict:
+    """Simulated seconds per CPU second of ``scenario``'s loop after its warm-up (what ``Simulation.frames`` does:
+    sensors, robot software, ground truth)."""
+    from crowdsim.loop import Simulation
+    from scenarios import load_scenario
+
+    sim = Simulation(load_scenario(scenario, duration=duration))
+    sim.warm_up()
+    cpu = time.process_time()
+    for _ in sim.frames(duration):
+        pass
+    return {"sim_s_per_cpu_s": duration / (time.process_time() - cpu)}
+
+
+def run(tree: str, duration: float) -> dict:
+    """Wall and CPU seconds of ``crowdsim run airport_disembarkation`` end to end, in a process of its own."""
+    with tempfile.TemporaryDirectory() as out:
+        before = _children_cpu()
+        wall = time.perf_counter()
+        subprocess.run([sys.executable, "-c", f"import sys; sys.path.insert(0, {tree!r}); from crowdsim.cli import "
+                        "main; sys.exit(main(sys.argv[1:]))", "run", "airport_disembarkation", "--duration",
+                        str(duration), "--out", f"{out}/run", "--quiet"], check=True, stdout=subprocess.DEVNULL)
+        return {"wall_s": time.perf_counter() - wall, "cpu_s": _children_cpu() - before}
+
+
+def _children_cpu() -> float:
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def crowd(agents: int, steps: int) -> dict:
+    """Crowd steps per CPU second with ``agents`` walkers in ``crowdsim bench sim``'s corridor (dt 0.04 s)."""
+    from crowdsim.bench.sim import our_crowd
+
+    walkers = our_crowd(agents)[0]
+    for _ in range(5):
+        walkers.step(0.04)
+    cpu = time.process_time()
+    for _ in range(steps):
+        walkers.step(0.04)
+    return {"steps_per_cpu_s": steps / (time.process_time() - cpu)}
+
+
+def env(observation: str, envs: int, people: int, steps: int) -> dict:
+    """Environment steps per CPU second of ``crowdsim/Navigate-v0`` with random actions (all sub-environments'
+    steps of a native vector environment, ``envs`` > 1), resetting where an episode ends."""
+    import gymnasium as gym
+    import numpy as np
+
+    import crowdsim  # noqa: F401  (registers the environments)
+
+    if envs == 1:
+        e = gym.make("crowdsim/Navigate-v0", observation=observation, people=people)
+    else:
+        e = gym.make_vec("crowdsim/Navigate-v0", num_envs=envs, vectorization_mode="vector_entry_point",
+                         observation=observation, people=people)
+    e.reset(seed=0)
+    actions = np.random.default_rng(0).uniform(-1, 1, (steps + 20, *e.action_space.shape)).astype(np.float32)
+
+    def step(k: int) -> None:
+        _, _, terminated, truncated, _ = e.step(actions[k])
+        if envs == 1 and (terminated or truncated):
+            e.reset()
+
+    for k in range(20):
+        step(k)
+    cpu = time.process_time()
+    for k in range(steps):
+        step(20 + k)
+    return {"env_steps_per_cpu_s": steps * envs / (time.process_time() - cpu)}
+
+
+def figure(tree: str, name: str, quick: bool) -> dict:
+    short = 0.25 if quick else 1.0
+    return {
+        "loop": lambda: loop("airport_disembarkation", 30.0 * short),
+        "run": lambda: run(tree, 120.0 * short),
+        "cameras": lambda: loop("airport_disembarkation_cameras", 10.0 * short),
+        "crowd_20": lambda: crowd(20, int(2000 * short)),
+        "env_truth": lambda: env("truth", 1, 20, int(2000 * short)),
+        "env_tracks": lambda: env("tracks", 1, 20, int(600 * short)),
+        "vector_truth": lambda: env("truth", 64, 10, int(100 * short)),
+        "vector_tracks": lambda: env("tracks", 64, 10, int(20 * short)),
+    }[name]()
+
+
+FIGURES = ("loop", "run", "cameras", "crowd_20", "env_truth", "env_tracks", "vector_truth", "vector_tracks")
+
+if __name__ == "__main__":
+    tree, name = sys.argv[1], sys.argv[2]
+    sys.path[0] = tree  # the simulator measured is TREE's (and this folder's modules shadow nothing)
+    print(json.dumps(figure(tree, name, "--quick" in sys.argv[3:])))
