@@ -139,11 +139,11 @@ class Simulation:
         follow = scenario.robot.follow.target if scenario.robot.driver == "follow" else None
         self.world = World(scenario, self.walls, rng["crowd"], rng["robot"], follow)
         self.lasers = [Laser(scene=self.scene, rng=rng[f"laser:{p.name}"], **p.params) for p in scenario.sensors.lasers]
-        self.laser_array = LaserArray(self.lasers, self.scene)  # all lasers due at a tick in one ray call
+        self.laser_array = LaserArray(self.lasers, self.scene)  # the lasers due at a tick: one scene sync
         for camera in self.depth_cameras:
             camera.rng = rng[f"depth_camera:{camera.name}"]
         self.tag = TagSensor(rng=rng["tag"], **scenario.sensors.tag.params) if follow is not None else None
-        # the capture order (cameras, then the lasers in one batched call) fixes the order in which detections
+        # the capture order (cameras, then the lasers together) fixes the order in which detections
         # reach the fusion, and with them the fused detections' ids
         self.sensors = [*self.depth_cameras, *self.wall_cameras, *self.lasers, *self.custom_sensors,
                         *([self.tag] if self.tag is not None else [])]

@@ -60,8 +60,8 @@ class Periodic:
 
 def capture_due(sensors: list, world: Any, stamp: float) -> list[tuple[Any, Any]]:
     """(sensor, frame) of every sensor due at ``stamp``, in the list's order, each sensor's clock moved on. Sensors
-    that share a ``batch`` (the lasers of one scene: one batched ray call) are captured together, where the first of
-    them stands in the list."""
+    that share a ``batch`` (the lasers of one scene, cast after one sync of it) are captured together, where the first
+    of them stands in the list."""
     due = [s for s in sensors if s.due(stamp)]
     out, done = [], set()
     for sensor in due:

@@ -272,28 +272,3 @@ def test_sync_grows_past_capacity_when_more_persons_are_alive():
     scene = Scene(np.array([FRONT_WALL], float), 0.425, 2)
     scene.sync(np.zeros(3), np.arange(3), np.array([[1.0, 1.0], [2.0, 1.0], [3.0, 1.0]]))
     assert (scene.capacity, scene.alive) == (3, 3)
-
-
-def test_one_batched_call_for_all_lasers_gives_the_scans_of_one_call_each():
-    # a 70 cm laser, a back-to-back twin and a 38 cm leg laser among walking people of many sizes: MuJoCo's batched
-    # ray call (every beam from its own origin, shared over two threads) reads exactly what one mj_multiRay per
-    # laser reads. The batch is made before the people are placed and sized, as in the loop, and sees each sync.
-    from sensors.laser import LaserArray
-
-    rng = np.random.default_rng(3)
-    persons = np.stack([rng.uniform(-6, 6, 12), rng.uniform(-6, 6, 12)], 1)
-    persons = persons[np.linalg.norm(persons, axis=1) > 1.0]
-    n = len(persons)
-    scene = Scene(np.array([FRONT_WALL, REAR_WALL], float), 0.425, n)
-    params = [laser_params(noise=[]), laser_params(name="rear", mount=[-0.25, 0.0, float(np.pi)], noise=[]),
-              laser_params(name="legs", height=0.38, fov_deg=360.0, noise=[])]
-    array = LaserArray([Laser(scene=scene, rng=np.random.default_rng(k), **p) for k, p in enumerate(params)], scene, threads=2)
-    assert array.batch is not None  # MuJoCo 4's batch module is here
-    for sizes in (rng.uniform(0.65, 1.05, n), rng.uniform(0.65, 1.05, n)):
-        scene.sync(np.zeros(3), np.arange(n) + 1, persons, np.full((n, 2), 1.0), rng.uniform(0, 2, n), sizes)
-        one_each = [Laser(scene=scene, rng=np.random.default_rng(k), **p).scan(0.5, np.zeros(3)) for k, p in enumerate(params)]
-        batched = array.scan(0.5, np.zeros(3), [0, 1, 2])
-        for a, b in zip(one_each, batched):
-            np.testing.assert_array_equal(a.ranges, b.ranges)
-            np.testing.assert_array_equal(a.person_id, b.person_id)
-        assert sum((s.person_id >= 0).sum() for s in batched) > 50

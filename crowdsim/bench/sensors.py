@@ -5,7 +5,7 @@ The people walk the bench hall (crowdsim/bench.py) and are synced into the scene
 middle facing +x; the mix is also measured in the airport with 100 of its people (``airport_mix_ms``). The sensor
 mix is the issue's: two back-to-back 70 cm lasers at 25 Hz, a 160 x 120 depth camera
 at 15 Hz and a 320 x 240 wall camera at 10 Hz; its real-time factor is one simulated second over the cost of its
-calls in that second, as the loop makes them: 25 syncs of the lasers' torso-only scene and 25 batched calls casting
+calls in that second, as the loop makes them: 25 syncs of the lasers' torso-only scene and 25 casts of
 both lasers (sensors/laser.py, LaserArray), and for the cameras' scene of whole people a sync at each tick a camera
 is due (20 a second), 15 depth images with the visible share of each person shown (``DepthCamera.visibility``, which
 the loop takes of every depth image) and 10 wall images.
@@ -63,7 +63,7 @@ def per_call_ms(n_people: int, quick: bool) -> dict:
     out["scene_sync_torsos_only"] = 1e3 / rate(sync, reps)
     out["laser_70cm_torsos_only"] = 1e3 / rate(lambda: lasers[0].scan(0.0, pose), reps)
     both = LaserArray(lasers, scene)
-    out["two_lasers_one_batched_call"] = 1e3 / rate(lambda: both.scan(0.0, pose, [0, 1]), reps)
+    out["two_lasers"] = 1e3 / rate(lambda: both.scan(0.0, pose, [0, 1]), reps)
     scene, pose, sync, lasers, _ = _setup(n_people, ("torso", "head", "legs"), cameras=True)
     out["scene_sync"] = 1e3 / rate(sync, reps)
     out["laser_70cm_full_bodies"] = 1e3 / rate(lambda: lasers[0].scan(0.0, pose), reps)
@@ -136,7 +136,7 @@ def camera_ticks(tick: float = 1 / LASER_HZ, seconds: float = 1.0) -> int:
 
 def _mix_realtime(c: dict) -> tuple[float, float]:
     """Real-time factors of the two lasers alone and of the whole mix, from per-call milliseconds ``c``."""
-    lasers_only = LASER_HZ * (c["scene_sync_torsos_only"] + c["two_lasers_one_batched_call"]) / 1e3
+    lasers_only = LASER_HZ * (c["scene_sync_torsos_only"] + c["two_lasers"]) / 1e3
     camera_syncs = camera_ticks()
     depth = c["depth_160x120"] + c["depth_160x120_visibility"]
     mix = lasers_only + (camera_syncs * c["scene_sync"] + DEPTH_HZ * depth
@@ -172,7 +172,7 @@ def airport_mix_ms(quick: bool, people: int = 100) -> dict:
     sim.camera_scene.sync(pose, *person)
     image = depth.render(0.0)
     out = {"scene_sync_torsos_only": 1e3 / rate(lambda: sim.scene.sync(pose, *person), reps),
-           "two_lasers_one_batched_call": 1e3 / rate(lambda: sim.laser_array.scan(0.0, pose, [0, 1]), reps),
+           "two_lasers": 1e3 / rate(lambda: sim.laser_array.scan(0.0, pose, [0, 1]), reps),
            "scene_sync": 1e3 / rate(lambda: sim.camera_scene.sync(pose, *person), reps),
            "depth_160x120": 1e3 / rate(lambda: depth.render(0.0), max(3, reps // 3)),
            "depth_160x120_visibility": 1e3 / rate(lambda: depth.visibility(image), max(3, reps // 3)),
