@@ -158,7 +158,8 @@ def _cmd_navigate(args) -> int:
     check_duration(args)
     scenario = _load(args, args.scenario)
     print(navigate_main(scenario, args.planner, args.first_seed, args.seeds, args.duration,
-                        Path(args.json) if args.json else None, workers=args.workers, progress=not args.quiet))
+                        Path(args.json) if args.json else None, workers=args.workers, progress=not args.quiet,
+                        ray=args.ray))
     return 0
 
 
@@ -368,6 +369,7 @@ def _add_commands(parser: _Parser, commands, title: str) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from . import workers
     from .bench import BENCHMARKS
     from .experiments import EXPERIMENTS
 
@@ -429,8 +431,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--allow-large", action="store_true",
                    help="run a scenario past the cost limits (steps, beams, pixels, grid cells, people) on purpose")
     p.add_argument("--duration", type=float, help="each episode's time limit in s (default: the scenario's duration)")
-    p.add_argument("--workers", type=int, default=1, help="processes the seeds are shared among (default 1; 2 on "
-                                                          "two cores)")
+    workers.add_arguments(p, workers=1)
     p.add_argument("--json", help="also write every episode's figures, their mean and sd and the counts to this "
                                   "new file")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -470,16 +471,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="bundled names or files; episode k runs the (k mod S)-th of the S given")
     p.add_argument("--episodes", type=int, required=True, help="episodes in all")
     p.add_argument("--out", required=True, help="the dataset folder: new, empty, or a dataset of this very "
-                                                "command, which is verified and completed")
+                                                "command, which is verified and completed; with --ray on a "
+                                                "cluster, one every node writes to")
     p.add_argument("--seed", type=int, default=0, help="root seed S: episode k is seeded from "
                                                        "SeedSequence(S).spawn(...)[k] (default 0)")
     p.add_argument("--duration", type=float, help="s recorded per episode (default: the scenario's)")
-    p.add_argument("--workers", type=int, default=1, help="local processes (default 1)")
+    workers.add_arguments(p, workers=1)
     p.add_argument("--allow-large", action="store_true",
                    help="run a scenario past the cost limits (steps, beams, pixels, grid cells, people) on purpose")
-    p.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
-                   help="run the episodes as Ray tasks: on the cluster at ADDRESS, or a local one (needs [ray]); "
-                        "the folder must be one every node writes to")
     p.add_argument("--rate-scale", type=float, nargs=2, metavar=("LO", "HI"),
                    help="per episode, every source's rate times a factor uniform in [LO, HI]")
     p.add_argument("--density-scale", type=float, nargs=2, metavar=("LO", "HI"),

@@ -30,7 +30,7 @@ from scenarios.typed import Scenario, plain
 
 from .loop import Simulation
 from .run import navigation_spec
-from .workers import process_pool
+from .workers import Engine, process_pool, run_all
 
 # the columns of the table: (label, key, scale, format), as evaluate-nav's
 GOAL_COLUMNS = ("success", "time_to_goal", "path_length", "path_irregularity", "min_distance",
@@ -99,11 +99,20 @@ def _run_seed(seed: int) -> dict:
     return episode_metrics(_worker["sim"], seed, _worker["duration"])
 
 
-def navigate(scenario: Scenario, seeds: list[int], duration: float, workers: int = 1, progress: bool = True) -> list[dict]:
+def _episode(seed: int, scenario: Scenario, duration: float) -> dict:
+    """One episode in a simulation of its own (a Ray task)."""
+    return episode_metrics(Simulation(scenario), seed, duration)
+
+
+def navigate(scenario: Scenario, seeds: list[int], duration: float, workers: int = 1, progress: bool = True,
+             ray: str | None = None) -> list[dict]:
     """The navigation figures of each seed's episode, in the order of ``seeds``; over ``workers`` processes (each
-    with a simulation of its own) when more than one."""
-    bar = tqdm(total=len(seeds), unit="seed", disable=not progress,
-               desc=f"{scenario.name} / {scenario.robot.planner.type}")
+    with a simulation of its own) when more than one, or as Ray tasks at ``ray`` (crowdsim/workers.py)."""
+    desc = f"{scenario.name} / {scenario.robot.planner.type}"
+    if ray is not None:
+        return run_all(_episode, seeds, scenario, duration, engine=Engine(workers, ray), desc=desc, unit="seed",
+                       progress=progress)
+    bar = tqdm(total=len(seeds), unit="seed", disable=not progress, desc=desc)
     try:
         if workers <= 1:
             sim = Simulation(scenario)
@@ -146,7 +155,7 @@ def summary(runs: list[dict], task: str) -> str:
 
 
 def navigate_main(scenario: Scenario, planner: str | None, first_seed: int, n_seeds: int, duration: float | None,
-                  json_path: Path | None, workers: int = 1, progress: bool = True) -> str:
+                  json_path: Path | None, workers: int = 1, progress: bool = True, ray: str | None = None) -> str:
     """``crowdsim navigate``: the table (and, with ``json_path``, a new file with every episode's figures)."""
     if json_path is not None and Path(json_path).exists():
         raise EvaluationInputError(f"--json {json_path}: already exists; expected a new file (nothing was run)")
@@ -161,7 +170,7 @@ def navigate_main(scenario: Scenario, planner: str | None, first_seed: int, n_se
     scenario = with_planner(scenario, planner)
     duration = scenario.duration if duration is None else float(duration)
     seeds = list(range(first_seed, first_seed + n_seeds))
-    runs = navigate(scenario, seeds, duration, workers, progress)
+    runs = navigate(scenario, seeds, duration, workers, progress, ray)
     task = "goal" if scenario.robot.driver == "goals" else "follow"
     if json_path is not None:
         mean, sd = mean_sd(runs)

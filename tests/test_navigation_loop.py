@@ -244,6 +244,17 @@ def test_navigate_prints_the_table_and_writes_json(tmp_path, capsys):
     assert "already exists" in capsys.readouterr().err
 
 
+def test_navigate_prints_the_same_table_on_two_workers_and_on_ray(tmp_path, capsys):
+    path = tmp_path / "nav.yaml"
+    path.write_text(yaml.safe_dump(goals_room()))
+    tables = []
+    for engine in ([], ["--workers", "2"], ["--workers", "2", "--ray"]):
+        assert main(["navigate", str(path), "--planner", "straight", "--seeds", "3", "--duration", "8", "--quiet",
+                     *engine]) == 0
+        tables.append(capsys.readouterr().out)
+    assert tables[0] == tables[1] == tables[2] and "seeds 1..3" in tables[0]
+
+
 def test_navigate_without_planner_keeps_the_scenarios_own_and_with_another_takes_its_defaults(tmp_path):
     path = tmp_path / "nav.yaml"
     path.write_text(yaml.safe_dump(goals_room(planner={"type": "zone", "zone_reach": 2.5})))

@@ -23,8 +23,6 @@ import json
 import os
 import re
 import shutil
-import signal
-import threading
 from concurrent.futures import FIRST_COMPLETED, wait
 from multiprocessing import get_context
 from pathlib import Path
@@ -38,7 +36,7 @@ from scenarios.typed import Scenario, as_written
 from .. import __version__
 from ..outdir import RunDirError, check_out_dir
 from ..stops import stops_held
-from ..workers import process_pool
+from ..workers import process_pool, ray_results, ray_session
 from .episode import COMPRESSIONS, write_episode
 from .layout import (EPISODE_FILES, DatasetError, FORMAT_VERSION, MANIFEST, SPLITS, episode_id, episode_seeds, file_digest,
                      in_mini, scenario_digest, split_of)
@@ -508,41 +506,10 @@ def _run_with_processes(jobs, out, compression, workers, _address, frames_bar):
 
 
 def _run_with_ray(jobs, out, compression, workers, address, frames_bar):
-    """Episodes as Ray tasks, on the cluster at ``address`` or a local one ("local"); on an error or an
-    interruption the tasks not finished are cancelled (their workers killed)."""
-    try:
-        import ray
-    except ImportError:
-        raise DatasetError("--ray: Ray is not installed; expected pip install -e \".[ray]\"") from None
-    started = not ray.is_initialized()
-    if started:
-        env = {"MUJOCO_GL": os.environ.get("MUJOCO_GL", "")}
-        handlers = {}
-        if threading.current_thread() is threading.main_thread():
-            handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-        ray.init(address=None if address == "local" else address, num_cpus=workers if address == "local" else None,
-                 runtime_env={"env_vars": env}, include_dashboard=False, log_to_driver=False)
-        for s, handler in handlers.items():  # a local head node takes SIGTERM for itself: the command's stops go on
-            if handler is not None:
-                signal.signal(s, handler)
-    task = ray.remote(num_cpus=1)(make_episode)
-    pending = []
-    try:
-        pending = [task.remote(job, out, compression) for job in jobs]
-        while pending:
-            finished, pending = ray.wait(pending, num_returns=1, timeout=0.5)
-            for ref in finished:
-                entry = ray.get(ref)
-                frames_bar.update(entry["frames"])
-                yield entry
-    except BaseException:
-        with stops_held():
-            for ref in pending:
-                try:
-                    ray.cancel(ref, force=True)
-                except Exception:  # noqa: BLE001 - finished meanwhile, or the cluster gone
-                    pass
-        raise
-    finally:
-        if started:
-            ray.shutdown()
+    """Episodes as Ray tasks, on the cluster at ``address`` or a local one ("local"); yields each entry as it ends
+    (crowdsim/workers.py: on an error or an interruption the tasks not finished are cancelled)."""
+    with ray_session(address, workers) as ray:
+        task = ray.remote(num_cpus=1)(make_episode)
+        for _, entry in ray_results(ray, [task.remote(job, out, compression) for job in jobs]):
+            frames_bar.update(entry["frames"])
+            yield entry

@@ -22,6 +22,8 @@ from pipeline.types import TrackedGroups
 
 from .relations import DURATION, HELD_OUT_SEED, SCENARIO, GroupCycle, collect
 from .seeds import map_seeds
+from .. import workers
+from ..workers import Engine
 
 MODELS = ("svm", "forest", "spencer")
 THRESHOLDS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
@@ -73,9 +75,9 @@ def one_seed(seed: int, duration: float = DURATION) -> list[dict]:
     return [score(cycles, *config) for config in configurations()]
 
 
-def run(seeds: list[int], duration: float = DURATION, workers: int = 1, progress: bool = True) -> list[list[dict]]:
+def run(seeds: list[int], duration: float = DURATION, engine: Engine = Engine(), progress: bool = True) -> list[list[dict]]:
     """[seed][configuration] results."""
-    return map_seeds(one_seed, seeds, duration, workers=workers, desc="groups", progress=progress)
+    return map_seeds(one_seed, seeds, duration, engine=engine, desc="groups", progress=progress)
 
 
 def pooled(results: list[list[dict]], k: int, path: tuple[str, ...]) -> float | None:
@@ -205,7 +207,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--seeds", type=int, default=5, help=f"held-out seeds, from {HELD_OUT_SEED} (default 5)")
     parser.add_argument("--duration", type=float, default=DURATION,
                         help=f"s of each airport run (default {DURATION:g})")
-    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    workers.add_arguments(parser)
     add_out_argument(parser, "groups")
 
 
@@ -219,7 +221,7 @@ def main(args) -> int:
     check_duration(args)
     seeds = held_out_seeds(args.seeds)
     out = run_dir(args, "groups")
-    results = run(seeds, args.duration, workers=args.workers)
+    results = run(seeds, args.duration, engine=Engine(args.workers, args.ray))
     print(write_directory(out, lambda tmp: write(tmp, results, seeds)))
     print(f"\n{out / 'groups.md'}, groups.json, groups.png")
     return 0

@@ -25,6 +25,7 @@ from scenarios import load_scenario
 from scenarios.typed import Scenario
 
 from .seeds import map_seeds
+from ..workers import Engine
 
 SCENARIO = "airport_disembarkation"
 TRAIN_SEED, CALIBRATION_SEEDS, HELD_OUT_SEED = 1100, list(range(1120, 1125)), 1200
@@ -85,10 +86,10 @@ def collect(seed: int, duration: float = DURATION) -> list[GroupCycle]:
     return out
 
 
-def collect_seeds(seeds: list[int], duration: float = DURATION, workers: int = 1,
+def collect_seeds(seeds: list[int], duration: float = DURATION, engine: Engine = Engine(),
                   progress: bool = True) -> list[list[GroupCycle]]:
-    """``collect`` of each seed, in order (in ``workers`` spawned processes when more than one)."""
-    return map_seeds(collect, seeds, duration, workers=workers, desc="simulating", progress=progress)
+    """``collect`` of each seed, in order, on ``engine``."""
+    return map_seeds(collect, seeds, duration, engine=engine, desc="simulating", progress=progress)
 
 
 def labelled_pairs(cycle: GroupCycle, min_speed: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
@@ -143,11 +144,11 @@ def train_forest(x: np.ndarray, y: np.ndarray) -> RelationTable:
     return tabulate(forest, GATES, TABLE_STEP, TABLE_SAMPLES)
 
 
-def train(n_seeds: int = 20, duration: float = DURATION, workers: int = 2, progress: bool = True):
+def train(n_seeds: int = 20, duration: float = DURATION, engine: Engine = Engine(), progress: bool = True):
     """The two classifiers (``svm``, ``forest``) trained on ``n_seeds`` training seeds, and what they were made
     from."""
     train_seeds = list(range(TRAIN_SEED, TRAIN_SEED + n_seeds))
-    runs = collect_seeds(train_seeds + CALIBRATION_SEEDS, duration, workers, progress)
+    runs = collect_seeds(train_seeds + CALIBRATION_SEEDS, duration, engine, progress)
     return fit(runs[:n_seeds], runs[n_seeds:], train_seeds, duration)
 
 

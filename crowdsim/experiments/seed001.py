@@ -29,6 +29,8 @@ from pipeline.tracking.rjmcmc import TABLE1_WEIGHTS, RjmcmcTracker, View, views
 from pipeline.types import DetectedPersons
 
 from .seeds import map_seeds
+from .. import workers
+from ..workers import Engine
 
 SEQUENCES = (("I", "seed001_room_1"), ("II", "seed001_room_2"), ("III", "seed001_room_3"))
 LEAD_IN = 3.0  # s: 15 frames at 5 Hz, the Sigma-Delta model's bootstrap
@@ -156,11 +158,11 @@ def _record_training(index: int) -> list[RecordedFrame]:
     return record(*TRAINING[index])
 
 
-def tune(workers: int = 1, progress: bool = True) -> dict:
+def tune(engine: Engine = Engine(), progress: bool = True) -> dict:
     """Coordinate search of the pooled likelihood's own parameters (``TUNE_GRID``, from ``TUNE_START``) for the mean
     MOTA over the four modes on the training sequences (filter seed 0); a value replaces the best only if it raises
     the mean by ``TUNE_MARGIN`` or more, about one filter seed's noise. Returns the best and every trial."""
-    frames = map_seeds(_record_training, list(range(len(TRAINING))), workers=workers, desc="training sequences",
+    frames = map_seeds(_record_training, list(range(len(TRAINING))), engine=engine, desc="training sequences",
                        progress=progress)
 
     def score(params):
@@ -205,9 +207,9 @@ def _one_sequence(index: int, runs: int) -> dict:
     return {"figures": figures, "ms": ms, "frames": len(frames)}
 
 
-def experiment(runs: int = 8, workers: int = 1, progress: bool = True) -> dict:
+def experiment(runs: int = 8, engine: Engine = Engine(), progress: bool = True) -> dict:
     """Every sequence, mode and run: figures [sequences, modes, runs, columns], ms per cycle [sequences, modes]."""
-    out = map_seeds(_one_sequence, list(range(len(SEQUENCES))), runs, workers=workers, desc="seed001 sequences",
+    out = map_seeds(_one_sequence, list(range(len(SEQUENCES))), runs, engine=engine, desc="seed001 sequences",
                     progress=progress)
     return {"figures": np.array([o["figures"] for o in out], float), "ms": np.array([o["ms"] for o in out]),
             "frames": [o["frames"] for o in out], "runs": runs}
@@ -345,7 +347,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--tune", action="store_true", help="choose the filter's pooled-likelihood parameters on "
                                                             "training sequences (rooms 3 and 2 at seeds 4000, 4001) "
                                                             "in place of the tables: tune.md, tune.json")
-    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    workers.add_arguments(parser)
     add_out_argument(parser, "seed001")
 
 
@@ -358,9 +360,9 @@ def main(args) -> int:
         raise UsageError(f"--runs and --workers: expected at least 1, got {args.runs} and {args.workers}")
     out = run_dir(args, "seed001")
     if args.tune:
-        print(write_directory(out, lambda tmp: write_tuning(tmp, tune(workers=args.workers))))
+        print(write_directory(out, lambda tmp: write_tuning(tmp, tune(engine=Engine(args.workers, args.ray)))))
         return 0
-    results = experiment(args.runs, workers=args.workers)
+    results = experiment(args.runs, engine=Engine(args.workers, args.ray))
     print(write_directory(out, lambda tmp: write(tmp, results)))
     print(f"\n{out / 'seed001.md'}, seed001.json, seed001.png")
     return 0

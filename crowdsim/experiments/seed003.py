@@ -37,6 +37,8 @@ from scenarios.typed import Scenario
 
 from .seeds import map_seeds
 from .train_hog_robot import recording, truth_boxes
+from .. import workers
+from ..workers import Engine
 
 SITUATIONS = ("back_and_forth", "random_walk", "side_by_side", "running", "group")
 SITUATION_LABELS = ("Back and forth", "Random walk", "Side by side", "Running", "Group")
@@ -201,9 +203,9 @@ def runs(seeds: int) -> list[tuple[str, str, int]]:
     return [(s, m, seed) for seed in range(FIRST_SEED, FIRST_SEED + seeds) for m in MOTIONS for s in SITUATIONS]
 
 
-def experiment(seeds: int = 1, workers: int = 2, preset: str = "kinect_160", progress: bool = True) -> dict:
+def experiment(seeds: int = 1, engine: Engine = Engine(), preset: str = "kinect_160", progress: bool = True) -> dict:
     """Every situation under every motion, ``seeds`` times: each run's counts per variant and kind."""
-    out = map_seeds(_one_run, list(range(len(runs(seeds)))), seeds, preset, workers=workers,
+    out = map_seeds(_one_run, list(range(len(runs(seeds)))), seeds, preset, engine=engine,
                     desc="seed003 runs", progress=progress)
     return {"runs": out, "seeds": seeds, "preset": preset}
 
@@ -348,7 +350,7 @@ def add_arguments(parser) -> None:
                                                              "(default 1)")
     parser.add_argument("--preset", choices=("kinect_160", "kinect_640"), default="kinect_160",
                         help="the robot camera's resolution (default kinect_160, QQVGA, as seed 003's timing)")
-    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    workers.add_arguments(parser)
     add_out_argument(parser, "seed003")
 
 
@@ -360,7 +362,7 @@ def main(args) -> int:
     if args.seeds < 1 or args.workers < 1:
         raise UsageError(f"--seeds and --workers: expected at least 1, got {args.seeds} and {args.workers}")
     out = run_dir(args, "seed003")
-    results = experiment(args.seeds, workers=args.workers, preset=args.preset)
+    results = experiment(args.seeds, engine=Engine(args.workers, args.ray), preset=args.preset)
     print(write_directory(out, lambda tmp: write(tmp, results)))
     print(f"\n{out / 'seed003.md'}, seed003.json, seed003.png")
     return 0

@@ -1,24 +1,13 @@
-"""One function of a seed over many seeds, in order, with a progress bar: in the calling process, or in ``workers``
-worker processes (crowdsim/workers.py)."""
+"""One function of a seed over many seeds, in order, with a progress bar, on the engine the command was given
+(crowdsim/workers.py: this process, local worker processes, or Ray)."""
 
 from __future__ import annotations
 
-from tqdm import tqdm
-
-from ..workers import process_pool
+from ..workers import Engine, run_all
 
 
-def map_seeds(fn, seeds: list[int], *args, workers: int = 1, desc: str = "seeds", progress: bool = True) -> list:
-    """``[fn(seed, *args) for seed in seeds]``; ``fn`` must be importable (a module's function) for ``workers`` > 1."""
-    out = []
-    with tqdm(total=len(seeds), unit="seed", desc=desc, disable=not progress) as bar:
-        if workers <= 1:
-            for seed in seeds:
-                out.append(fn(seed, *args))
-                bar.update()
-            return out
-        with process_pool(workers) as pool:
-            for result in pool.map(fn, seeds, *([a] * len(seeds) for a in args)):
-                out.append(result)
-                bar.update()
-    return out
+def map_seeds(fn, seeds: list[int], *args, engine: Engine = Engine(), desc: str = "seeds",
+              progress: bool = True) -> list:
+    """``[fn(seed, *args) for seed in seeds]``; ``fn`` must be importable (a module's function) for worker processes
+    and Ray."""
+    return run_all(fn, seeds, *args, engine=engine, desc=desc, unit="seed", progress=progress)

@@ -29,6 +29,8 @@ from scenarios.schema import validate
 
 from .recorded import Cycle, detect, record, track
 from .seeds import map_seeds
+from .. import workers
+from ..workers import Engine
 
 SCENARIO = "airport_disembarkation"
 DETECTOR = {"type": "laser_learned", "model": "adaboost"}  # seed 000 Sec. IV-C: the boosted segment classifier
@@ -77,10 +79,10 @@ def _one_seed(seed: int, duration: float | None) -> list[dict]:
     return [replay(cycles, detections, spec) for _, spec, _ in ROWS]
 
 
-def table2(seeds: list[int], duration: float | None = None, workers: int = 1,
+def table2(seeds: list[int], duration: float | None = None, engine: Engine = Engine(),
            progress: bool = True) -> dict[str, np.ndarray]:
     """Per evaluation (``EVALUATIONS``), [rows, seeds, columns] of figures."""
-    out = map_seeds(_one_seed, seeds, duration, workers=workers, desc="table2", progress=progress)
+    out = map_seeds(_one_seed, seeds, duration, engine=engine, desc="table2", progress=progress)
     return {name: np.array([[[r[name][c] for c in COLUMNS] for r in rows] for rows in out]).transpose(1, 0, 2)
             for name in EVALUATIONS}
 
@@ -186,7 +188,7 @@ def add_arguments(parser) -> None:
 
     parser.add_argument("--seeds", type=int, default=20, help="seeds from 1 (default 20)")
     parser.add_argument("--duration", type=float, help="s of each airport run (default: the scenario's)")
-    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    workers.add_arguments(parser)
     add_out_argument(parser, "table2")
 
 
@@ -200,7 +202,7 @@ def main(args) -> int:
     check_duration(args)
     seeds = list(range(1, args.seeds + 1))
     out = run_dir(args, "table2")
-    figures = table2(seeds, args.duration, workers=args.workers)
+    figures = table2(seeds, args.duration, engine=Engine(args.workers, args.ray))
     print(write_directory(out, lambda tmp: write(tmp, figures, seeds)))
     print(f"\n{out / 'table2.md'}, table2.json, table2.png")
     return 0

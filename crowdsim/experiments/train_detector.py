@@ -36,6 +36,8 @@ from tqdm import tqdm
 
 from crowdsim.datasets.detection_eval import MIN_BEAMS
 from crowdsim.experiments.seeds import map_seeds
+from crowdsim import workers
+from crowdsim.workers import Engine
 from evaluation.detection import RADII, DetectionScores, detection_scores
 from pipeline.detectors.laser_segments import SegmentDetector
 from pipeline.detectors.learned_segments import MODEL_FILES, Forest, SegmentModel, Stumps, candidates, push_back
@@ -141,9 +143,9 @@ def collect(seed: int, duration: float, every: int = EVERY) -> Scans:
     return Scans(**{k: np.concatenate(v) for k, v in parts.items()}, n_scans=n)
 
 
-def collect_seeds(seeds: list[int], duration: float, workers: int) -> list[Scans]:
-    """``collect`` of each of ``seeds``, in order (in ``workers`` spawned processes when more than one)."""
-    return map_seeds(collect, seeds, duration, workers=workers, desc="simulating")
+def collect_seeds(seeds: list[int], duration: float, engine: Engine) -> list[Scans]:
+    """``collect`` of each of ``seeds``, in order, on ``engine``."""
+    return map_seeds(collect, seeds, duration, engine=engine, desc="simulating")
 
 
 def stumps_from_sklearn(ada) -> Stumps:
@@ -219,7 +221,7 @@ def table(rows: dict[str, dict[float, DetectionScores]]) -> str:
                      for row in [head, *body])
 
 
-def train(n_seeds: int = 20, quick: bool = False, workers: int = 2) -> tuple[dict[str, SegmentModel], str]:
+def train(n_seeds: int = 20, quick: bool = False, engine: Engine = Engine()) -> tuple[dict[str, SegmentModel], str]:
     """Collect, train, choose thresholds and score: the two models and the report (tables and notes)."""
     try:
         import sklearn
@@ -233,14 +235,14 @@ def train(n_seeds: int = 20, quick: bool = False, workers: int = 2) -> tuple[dic
     if not 1 <= n_seeds <= VALIDATION_SEEDS[0] - TRAIN_SEED:
         raise ValueError(f"--seeds: expected 1 to {VALIDATION_SEEDS[0] - TRAIN_SEED} training seeds, got {n_seeds}")
     train_seeds = list(range(TRAIN_SEED, TRAIN_SEED + n_seeds))
-    parts = collect_seeds([*train_seeds, *val_seeds, *test_seeds], duration, workers)
+    parts = collect_seeds([*train_seeds, *val_seeds, *test_seeds], duration, engine)
     data, val, test = (Scans.join(parts[a:b]) for a, b in ((0, n_seeds), (n_seeds, n_seeds + len(val_seeds)),
                                                            (n_seeds + len(val_seeds), len(parts))))
     offset, per_width = fit_position(data)
     x = data.x.astype(np.float32)
     estimators = {"adaboost": AdaBoostClassifier(DecisionTreeClassifier(max_depth=1), n_estimators=N_STUMPS,
                                                  random_state=0),
-                  "forest": RandomForestClassifier(**FOREST, n_jobs=workers, random_state=0)}
+                  "forest": RandomForestClassifier(**FOREST, n_jobs=engine.workers, random_state=0)}
     convert = {"adaboost": stumps_from_sklearn, "forest": forest_from_sklearn}
     info = {"scenario": SCENARIO, "train_seeds": [train_seeds[0], train_seeds[-1]],
             "validation_seeds": [val_seeds[0], val_seeds[-1]], "duration_s": duration, "every": EVERY,
@@ -287,7 +289,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--seeds", type=int, default=20, help=f"training seeds, from {TRAIN_SEED} (default 20)")
     parser.add_argument("--quick", action="store_true", help="4 short training seeds, 1 validation and 1 test seed (a "
                                                              "smoke test, not models to ship)")
-    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    workers.add_arguments(parser)
     add_models_out_argument(parser, "pipeline/detectors/models/")
 
 
@@ -306,7 +308,7 @@ def main(args) -> int:
         raise UsageError(f"--workers: expected at least 1 process, got {args.workers}")
     out = training_out(args)
     t0 = time.perf_counter()
-    models, report = train(args.seeds, quick=args.quick, workers=args.workers)
+    models, report = train(args.seeds, quick=args.quick, engine=Engine(args.workers, args.ray))
     paths = saved(models, save_models, out, MODELS_DIR)
     print(report)
     print(f"{time.perf_counter() - t0:.0f} s; models: " + sizes(paths))

@@ -37,6 +37,8 @@ from scenarios.loader import read_raw, resolve
 from scenarios.typed import Scenario
 
 from .seeds import map_seeds
+from .. import workers
+from ..workers import Engine
 
 SCENARIO = "seed001_room_1"
 TRAIN_SEED, VALIDATION_SEEDS, TEST_SEEDS = 4100, (4200, 4201), (4300, 4301)
@@ -188,12 +190,12 @@ def opencv_people(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return boxes[keep], scores[keep]
 
 
-def compare_opencv(duration: float = DURATION, workers: int = 2) -> dict:
+def compare_opencv(duration: float = DURATION, engine: Engine = Engine()) -> dict:
     """Our shipped model against OpenCV's INRIA-trained one on the held-out ``TEST_SEEDS``: each one's peak F1 (its
     best threshold there) and ours at its own threshold (chosen on the validation seeds)."""
     from pipeline.detectors.hog import load_model
 
-    data = map_seeds(collect, list(TEST_SEEDS), duration, workers=workers, desc="hog vs opencv")
+    data = map_seeds(collect, list(TEST_SEEDS), duration, engine=engine, desc="hog vs opencv")
     test = Images(*(sum((getattr(d, f) for d in data), []) for f in ("rgb", "boxes", "positive")))
     ours = load_model()
     low = HogModel(ours.weight, ours.bias, -1.0)
@@ -204,9 +206,9 @@ def compare_opencv(duration: float = DURATION, workers: int = 2) -> dict:
             "opencv_peak": peak_f1([opencv_people(rgb) for rgb in test.rgb], test.boxes)[1]}
 
 
-def train(n_seeds: int = 10, workers: int = 2, duration: float = DURATION) -> tuple[HogModel, dict]:
+def train(n_seeds: int = 10, engine: Engine = Engine(), duration: float = DURATION) -> tuple[HogModel, dict]:
     seeds = list(range(TRAIN_SEED, TRAIN_SEED + n_seeds))
-    data = map_seeds(collect, seeds + list(VALIDATION_SEEDS), duration, workers=workers, desc="train-hog")
+    data = map_seeds(collect, seeds + list(VALIDATION_SEEDS), duration, engine=engine, desc="train-hog")
     training = Images(*(sum((getattr(d, f) for d in data[:n_seeds]), []) for f in ("rgb", "boxes", "positive")))
     validation = Images(*(sum((getattr(d, f) for d in data[n_seeds:]), []) for f in ("rgb", "boxes", "positive")))
     rng = np.random.default_rng(0)
@@ -242,7 +244,7 @@ def add_arguments(parser) -> None:
                                                               "default 10)")
     parser.add_argument("--duration", type=float, default=DURATION,
                         help=f"s of each run the images come from (default {DURATION:g})")
-    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    workers.add_arguments(parser)
     add_models_out_argument(parser, "pipeline/detectors/models/")
 
 
@@ -265,7 +267,7 @@ def main(args) -> int:
         train_model = train
         out = training_seeds_out(args, 100, 4100)
     t0 = time.perf_counter()
-    model, info = train_model(args.seeds, args.workers, args.duration)
+    model, info = train_model(args.seeds, Engine(args.workers, args.ray), args.duration)
     name = ROBOT_MODEL_FILE if robot else None
     paths = saved((model, info), lambda m, where: [save(*m, where, *([name] if name else []))], out, MODELS_DIR)
     v = info["validation"]
@@ -285,7 +287,7 @@ def main(args) -> int:
 
 def add_compare_arguments(parser) -> None:
     """``hog-vs-opencv``'s flags."""
-    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    workers.add_arguments(parser)
 
 
 def compare_main(args) -> int:
@@ -296,7 +298,7 @@ def compare_main(args) -> int:
         import cv2  # noqa: F401
     except ImportError:
         raise UsageError('experiment hog-vs-opencv: needs OpenCV: pip install -e ".[compare]"') from None
-    r = compare_opencv(workers=args.workers)
+    r = compare_opencv(engine=Engine(args.workers, args.ray))
     print(f"HOG person detectors on held-out seeds {r['test_seeds']} ({r['images']} images, "
           f"{r['ours_peak']['persons']} persons), a detection right at IoU 0.5:\n")
     print("| detector | F1 | precision | recall |\n|---|---|---|---|")

@@ -35,6 +35,7 @@ from scenarios.loader import read_raw, resolve
 from scenarios.typed import Scenario
 
 from .seeds import map_seeds
+from ..workers import Engine
 from .train_hog import fit
 
 SCENARIO = "ktp_room"
@@ -167,9 +168,9 @@ def candidate_scores(model: HogModel, data: Images) -> tuple[np.ndarray, np.ndar
     return np.concatenate(on), np.concatenate(off)
 
 
-def train(n_seeds: int = 10, workers: int = 2, duration: float = DURATION) -> tuple[HogModel, dict]:
+def train(n_seeds: int = 10, engine: Engine = Engine(), duration: float = DURATION) -> tuple[HogModel, dict]:
     seeds = list(range(TRAIN_SEED, TRAIN_SEED + n_seeds))
-    data = map_seeds(collect, seeds + list(VALIDATION_SEEDS), duration, workers=workers, desc="train-hog robot")
+    data = map_seeds(collect, seeds + list(VALIDATION_SEEDS), duration, engine=engine, desc="train-hog robot")
     fields = ("rgb", "boxes", "label", "persons")
     training = Images(*(sum((getattr(d, f) for d in data[:n_seeds]), []) for f in fields))
     validation = Images(*(sum((getattr(d, f) for d in data[n_seeds:]), []) for f in fields))

@@ -7,6 +7,9 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from .. import workers
+from ..workers import Engine
+
 
 def add_models_out_argument(parser, models: str) -> None:
     """``--out`` of a training command whose models ship in the folder ``models``."""
@@ -62,7 +65,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--seeds", type=int, default=20, help=f"training seeds, from {TRAIN_SEED} (default 20)")
     parser.add_argument("--duration", type=float, default=DURATION,
                         help=f"s of each airport run (default {DURATION:g})")
-    parser.add_argument("--workers", type=int, default=2, help="processes running the simulations (default 2)")
+    workers.add_arguments(parser)
     add_models_out_argument(parser, "pipeline/groups/models/")
 
 
@@ -76,7 +79,7 @@ def main(args) -> int:
     check_duration(args)
     out = training_seeds_out(args, 20, TRAIN_SEED)
     t0 = time.perf_counter()
-    models = train(args.seeds, args.duration, workers=args.workers)
+    models = train(args.seeds, args.duration, engine=Engine(args.workers, args.ray))
     paths = saved(models, save_models, out, MODELS_DIR)
     info = next(iter(models.values()))[1]
     print(f"{info['pairs']} pairs of tracks ({info['related']} related) from seeds {info['train_seeds'][0]}-"
