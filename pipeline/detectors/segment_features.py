@@ -111,17 +111,15 @@ def _distance(p, i, j):
 
 @kernel
 def _median(values, lo, n, scratch):
-    """The median of ``values[lo:lo + n]`` (the mean of the two middle ones for an even n), sorted in ``scratch``:
-    by insertion for the few points of a person's segment, where a general sort's set-up costs more."""
-    if n > 32:
-        scratch[:n] = values[lo:lo + n]
-        scratch[:n].sort()
-    else:
-        for i in range(n):
-            v, j = values[lo + i], i
-            while j > 0 and scratch[j - 1] > v:
-                scratch[j] = scratch[j - 1]
-                j -= 1
+    """The median of ``values[lo:lo + n]`` (the mean of the two middle ones for an even n), sorted in ``scratch`` by
+    Shell's method with Ciura's gaps: a few loops, where numba's general sort takes seconds to compile."""
+    scratch[:n] = values[lo:lo + n]
+    for gap in (701, 301, 132, 57, 23, 10, 4, 1):
+        for i in range(gap, n):
+            v, j = scratch[i], i
+            while j >= gap and scratch[j - gap] > v:
+                scratch[j] = scratch[j - gap]
+                j -= gap
             scratch[j] = v
     return (scratch[(n - 1) // 2] + scratch[n // 2]) / 2
 
