@@ -249,10 +249,10 @@ def test_navigate_prints_the_same_table_on_two_workers_and_on_ray(tmp_path, caps
     path.write_text(yaml.safe_dump(goals_room()))
     tables = []
     for engine in ([], ["--workers", "2"], ["--workers", "2", "--ray"]):
-        assert main(["navigate", str(path), "--planner", "straight", "--seeds", "3", "--duration", "8", "--quiet",
+        assert main(["navigate", str(path), "--planner", "straight", "--seeds", "2", "--duration", "5", "--quiet",
                      *engine]) == 0
         tables.append(capsys.readouterr().out)
-    assert tables[0] == tables[1] == tables[2] and "seeds 1..3" in tables[0]
+    assert tables[0] == tables[1] == tables[2] and "seeds 1..2" in tables[0]
 
 
 def test_navigate_without_planner_keeps_the_scenarios_own_and_with_another_takes_its_defaults(tmp_path):
