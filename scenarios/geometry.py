@@ -32,15 +32,57 @@ def closest_on_segments(points: np.ndarray, segs: np.ndarray) -> tuple[np.ndarra
     return away, np.linalg.norm(away, axis=-1)
 
 
+DENSE_PAIRS = 100_000  # points x segments up to which every pair is tested: below, a grid costs more than it saves
+
+
 def near_segments(points: np.ndarray, segs: np.ndarray, reach: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Index pairs (point, segment) whose bounding boxes, the segment's grown by ``reach``, overlap: the only
-    pairs that can lie within ``reach`` of each other. Cheap comparisons only, so exact work stays sparse."""
+    pairs that can lie within ``reach`` of each other, in (point, segment) order. Cheap comparisons only, so exact
+    work stays sparse; for many points and segments (a building's walls) only the pairs that share a cell of a
+    uniform grid are tested, which finds the same pairs."""
     lo = np.minimum(segs[:, 0], segs[:, 1])
     hi = np.maximum(segs[:, 0], segs[:, 1])
-    r = np.broadcast_to(np.asarray(reach, float), len(points))[:, None]
-    x, y = points[:, 0:1], points[:, 1:2]
-    mask = (x >= lo[:, 0] - r) & (x <= hi[:, 0] + r) & (y >= lo[:, 1] - r) & (y <= hi[:, 1] + r)
-    return np.nonzero(mask)
+    r = np.broadcast_to(np.asarray(reach, float), len(points))
+    if len(points) * len(segs) <= DENSE_PAIRS:
+        x, y, rp = points[:, 0:1], points[:, 1:2], r[:, None]
+        return np.nonzero((x >= lo[:, 0] - rp) & (x <= hi[:, 0] + rp) & (y >= lo[:, 1] - rp) & (y <= hi[:, 1] + rp))
+    p, s = _sharing_a_cell(points, r, lo, hi)
+    x, y, rp = points[p, 0], points[p, 1], r[p]
+    keep = (x >= lo[s, 0] - rp) & (x <= hi[s, 0] + rp) & (y >= lo[s, 1] - rp) & (y <= hi[s, 1] + rp)
+    return p[keep], s[keep]
+
+
+def _sharing_a_cell(points: np.ndarray, reach: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray,
+                                                                                                      np.ndarray]:
+    """The pairs (point, segment), in that order and each once, whose boxes (the point's grown by its reach) touch a
+    common cell of a grid whose cells are twice the largest reach (at least 1 m) wide."""
+    size = max(1.0, 2.0 * float(reach.max()))
+    origin = np.minimum(lo.min(axis=0), (points - reach[:, None]).min(axis=0))
+    s_lo, s_hi = np.floor((lo - origin) / size).astype(np.int64), np.floor((hi - origin) / size).astype(np.int64)
+    p_lo = np.floor((points - reach[:, None] - origin) / size).astype(np.int64)
+    p_hi = np.floor((points + reach[:, None] - origin) / size).astype(np.int64)
+    columns = int(max(s_hi[:, 0].max(), p_hi[:, 0].max())) + 1
+    seg, cell = _cells(s_lo, s_hi, columns)
+    order = np.argsort(cell, kind="stable")
+    seg, cell = seg[order], cell[order]
+    point, pcell = _cells(p_lo, p_hi, columns)
+    first, last = np.searchsorted(cell, pcell, "left"), np.searchsorted(cell, pcell, "right")
+    count = last - first
+    p = np.repeat(point, count)
+    at = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
+    key = np.unique(p * len(lo) + seg[at])
+    return key // len(lo), key % len(lo)
+
+
+def _cells(lo: np.ndarray, hi: np.ndarray, columns: int) -> tuple[np.ndarray, np.ndarray]:
+    """For boxes spanning grid cells ``lo``..``hi`` [n, 2] (column, row): each (box, cell) it covers, the cell as
+    row * columns + column."""
+    span = hi - lo + 1
+    count = span[:, 0] * span[:, 1]
+    box = np.repeat(np.arange(len(lo)), count)
+    k = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+    column, row = lo[box, 0] + k % span[box, 0], lo[box, 1] + k // span[box, 0]
+    return box, row * columns + column
 
 
 def pair_vectors(points: np.ndarray, segs: np.ndarray, p: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
