@@ -60,6 +60,35 @@ def crowd(agents: int, steps: int) -> dict:
     return {"steps_per_cpu_s": steps / (time.process_time() - cpu)}
 
 
+def crowd_among_walls(agents: int, steps: int) -> dict:
+    """Crowd steps per CPU second with ``agents`` walkers in a 120 m hall of 850 square pillars (3,368 wall
+    segments: a building's worth, where the wall queries dominate)."""
+    import numpy as np
+
+    from crowdsim.crowd import Crowd
+    from scenarios import scenario_from_dict
+
+    h = 120.0
+    pillars = [[[x, y], [x + 0.4, y], [x + 0.4, y + 0.4], [x, y + 0.4]]
+               for x in np.arange(2, h - 2, 4.0) for y in np.arange(2, h - 2, 4.0)][:850]
+    corners = [(5, 5), (h - 5, 5), (h - 5, h - 5), (5, h - 5)]
+    scenario = scenario_from_dict({
+        "name": "pillared_hall", "map": {"walls": [[[0, 0], [h, 0], [h, h], [0, h], [0, 0]]], "obstacles": pillars},
+        "crowd": {"max_agents": agents},
+        "waypoints": {f"c{k}": {"position": list(p), "radius": 2.0} for k, p in enumerate(corners)},
+        "routes": {"loop": {"waypoints": ["c0", "c1", "c2", "c3"], "sink": False}}, "robot": {"start": [1.0, 1.0, 0.0]},
+        "sensors": {"lasers": [{"name": "front_laser", "mount": [0.25, 0, 0]}]}}, source="<pillared hall>")
+    rng = np.random.default_rng(0)
+    walkers = Crowd(scenario, rng)
+    walkers.add_walkers(rng.uniform(3, h - 3, (agents, 2)), "loop")
+    for _ in range(3):
+        walkers.step(0.04)
+    cpu = time.process_time()
+    for _ in range(steps):
+        walkers.step(0.04)
+    return {"steps_per_cpu_s": steps / (time.process_time() - cpu)}
+
+
 def env(observation: str, envs: int, people: int, steps: int) -> dict:
     """Environment steps per CPU second of ``crowdsim/Navigate-v0`` with random actions (all sub-environments'
     steps of a native vector environment, ``envs`` > 1), resetting where an episode ends."""
@@ -96,6 +125,7 @@ def figure(tree: str, name: str, quick: bool) -> dict:
         "run": lambda: run(tree, 120.0 * short),
         "cameras": lambda: loop("airport_disembarkation_cameras", 10.0 * short),
         "crowd_20": lambda: crowd(20, int(2000 * short)),
+        "crowd_400_walls": lambda: crowd_among_walls(400, int(20 * short)),
         "env_truth": lambda: env("truth", 1, 20, int(2000 * short)),
         "env_tracks": lambda: env("tracks", 1, 20, int(600 * short)),
         "vector_truth": lambda: env("truth", 64, 10, int(100 * short)),
@@ -103,7 +133,8 @@ def figure(tree: str, name: str, quick: bool) -> dict:
     }[name]()
 
 
-FIGURES = ("loop", "run", "cameras", "crowd_20", "env_truth", "env_tracks", "vector_truth", "vector_tracks")
+FIGURES = ("loop", "run", "cameras", "crowd_20", "crowd_400_walls", "env_truth", "env_tracks", "vector_truth",
+           "vector_tracks")
 
 if __name__ == "__main__":
     tree, name = sys.argv[1], sys.argv[2]
