@@ -57,10 +57,11 @@ def _sharing_a_cell(points: np.ndarray, reach: np.ndarray, lo: np.ndarray, hi: n
     """The pairs (point, segment), in that order and each once, whose boxes (the point's grown by its reach) touch a
     common cell of a grid whose cells are twice the largest reach (at least 1 m) wide."""
     size = max(1.0, 2.0 * float(reach.max()))
-    origin = np.minimum(lo.min(axis=0), (points - reach[:, None]).min(axis=0))
+    grown = reach[:, None] + 1e-9 * (1.0 + np.abs(points))  # (a box touching a cell's edge is found either side)
+    origin = np.minimum(lo.min(axis=0), (points - grown).min(axis=0))
     s_lo, s_hi = np.floor((lo - origin) / size).astype(np.int64), np.floor((hi - origin) / size).astype(np.int64)
-    p_lo = np.floor((points - reach[:, None] - origin) / size).astype(np.int64)
-    p_hi = np.floor((points + reach[:, None] - origin) / size).astype(np.int64)
+    p_lo = np.floor((points - grown - origin) / size).astype(np.int64)
+    p_hi = np.floor((points + grown - origin) / size).astype(np.int64)
     columns = int(max(s_hi[:, 0].max(), p_hi[:, 0].max())) + 1
     seg, cell = _cells(s_lo, s_hi, columns)
     order = np.argsort(cell, kind="stable")
