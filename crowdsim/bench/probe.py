@@ -51,8 +51,12 @@ def crowd(agents: int, steps: int) -> dict:
     """Crowd steps per CPU second with ``agents`` walkers in ``crowdsim bench sim``'s corridor (dt 0.04 s)."""
     from crowdsim.bench.sim import our_crowd
 
-    walkers = our_crowd(agents)[0]
-    for _ in range(5):
+    return _stepped(our_crowd(agents)[0], 5, steps)
+
+
+def _stepped(walkers, untimed: int, steps: int) -> dict:
+    """Steps per CPU second of the crowd ``walkers`` (dt 0.04 s) over ``steps`` steps after ``untimed`` ones."""
+    for _ in range(untimed):
         walkers.step(0.04)
     cpu = time.process_time()
     for _ in range(steps):
@@ -81,12 +85,7 @@ def crowd_among_walls(agents: int, steps: int) -> dict:
     rng = np.random.default_rng(0)
     walkers = Crowd(scenario, rng)
     walkers.add_walkers(rng.uniform(3, h - 3, (agents, 2)), "loop")
-    for _ in range(3):
-        walkers.step(0.04)
-    cpu = time.process_time()
-    for _ in range(steps):
-        walkers.step(0.04)
-    return {"steps_per_cpu_s": steps / (time.process_time() - cpu)}
+    return _stepped(walkers, 3, steps)
 
 
 def env(observation: str, envs: int, people: int, steps: int) -> dict:
