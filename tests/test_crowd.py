@@ -280,25 +280,3 @@ def test_wall_following_keeps_the_wall_on_its_side_round_a_corner(make_scenario)
     left = along_nearest_wall(crowd.pos, crowd.walls, np.array([-1.0, -1.0]))
     assert right == pytest.approx(np.array([[1.0, 0.0], [0.0, 1.0]]))
     assert left == pytest.approx(np.array([[-1.0, 0.0], [0.0, -1.0]]))
-
-
-def test_dense_moussaid_equals_the_pairwise_force_in_each_world():
-    """The environments' dense, complex-number Moussaid force is the crowd's pairwise one, world by world (the
-    pairwise one drops pairs below 0.005 m/s^2 and works in single precision: they agree to that)."""
-    from crowdsim.crowd import forces
-
-    rng = np.random.default_rng(0)
-    E, N = 3, 12
-    pos, vel = rng.uniform(0, 5, (E, N, 2)), rng.normal(0, 1, (E, N, 2))
-    e = vel / np.linalg.norm(vel, axis=2, keepdims=True)
-    A, lam, gamma, n, n_prime, fov, c = 2.1, 2.0, 0.35, 2.0, 3.0, 200.0, 0.46
-    to_complex = lambda a: a[..., 0] + 1j * a[..., 1]  # noqa: E731
-    dense = forces.moussaid2009_dense(to_complex(pos), to_complex(vel), to_complex(e), A, lam, gamma, n, n_prime, fov,
-                                      c)
-    pairs = np.stack(np.triu_indices(N, 1), 1)
-    for k in range(E):
-        ref = forces.moussaid2009(pos[k], vel[k], pairs, A, lam, gamma, n, n_prime, direction=e[k], fov_deg=fov,
-                                  out_of_view=c)
-        # each person drops at most N - 1 pairs, each weaker than NEGLIGIBLE
-        assert np.abs(ref[:, 0] + 1j * ref[:, 1] - dense[k]).max() < (N - 1) * forces.NEGLIGIBLE
-        assert np.abs(dense[k]).max() > 1.0  # a real interaction was compared

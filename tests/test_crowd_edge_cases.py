@@ -151,28 +151,3 @@ def test_persons_who_start_at_a_sink_leave_on_the_first_tick(make_scenario):
         crowd.step(DT)
         assert crowd.id.tolist() == [1, walker]  # whoever the source emits is gone within the tick
     assert crowd.add_walkers(np.array([[10.0, 10.0]]), "out")[0] > walker + 5  # the source did emit persons
-
-
-def test_wall_queries_through_the_grid_find_the_dense_tests_pairs(monkeypatch):
-    # by hand: a point 0.5 m off a 10 m wall (reach 1) is near it; one whose box, 0.4 m each way, ends 0.1 m short of
-    # a short segment's box is not, and is at reach 0.6; the grid (forced on) and the dense test agree
-    from scenarios import geometry
-
-    monkeypatch.setattr(geometry, "DENSE_PAIRS", 0)
-    segs = np.array([[[0.0, 0.0], [10.0, 0.0]], [[20.0, 20.0], [21.0, 21.0]]])
-    points = np.array([[5.0, 0.5], [20.5, 19.5]])
-    assert [a.tolist() for a in geometry.near_segments(points, segs, np.array([1.0, 0.4]))] == [[0], [0]]
-    assert [a.tolist() for a in geometry.near_segments(points, segs, np.array([1.0, 0.6]))] == [[0, 1], [0, 1]]
-    # random walls and points, a reach per point or one for all: the same pairs in the same order
-    rng = np.random.default_rng(0)
-    for trial in range(60):
-        n, m = int(rng.integers(1, 300)), int(rng.integers(1, 400))
-        a = rng.uniform(-50, 50, (m, 2))
-        segs = np.stack([a, a + rng.normal(0, 3, (m, 2))], 1)
-        points = rng.uniform(-55, 55, (n, 2))
-        reach = rng.uniform(0, 3, n) if trial % 2 else float(rng.uniform(0.1, 5))
-        monkeypatch.setattr(geometry, "DENSE_PAIRS", 0)
-        grid = geometry.near_segments(points, segs, reach)
-        monkeypatch.setattr(geometry, "DENSE_PAIRS", 10 ** 12)
-        dense = geometry.near_segments(points, segs, reach)
-        assert all(np.array_equal(g, d) for g, d in zip(grid, dense))

@@ -212,7 +212,7 @@ def test_robot_visibility_changes_how_people_react():
         w.crowd_p = w.crowd_p.replace(random_force=0.0)
         w.robot_pose[0] = [6.0, 4.0, 0.0]
         w.x[0], w.y[0], w.gx[0], w.gy[0], w.v0[0] = 3.0, 4.3, 11.0, 4.3, 1.2  # passing 0.3 m off the robot's centre
-        closest[visible] = min(w.tick(np.zeros((1, 2)), np.zeros((1, 1), complex))[0] for _ in range(150))
+        closest[visible] = w.tick(np.zeros((1, 2)), np.zeros((150, 1, 1), complex))[0].min()
     assert closest[False] < 0.0  # walked into: contacts push them out again each tick
     assert closest[True] > 0.0
 

@@ -279,7 +279,7 @@ class Escapes:
         slow = ~crowd.holding & (np.linalg.norm(crowd.vel, axis=1) < 0.2 * crowd.v0)
         crowd.slow_time = np.where(slow, crowd.slow_time + dt, 0.0)
         escaping = np.flatnonzero(crowd.escape)
-        clear = ~segments_cross(crowd.pos[escaping], crowd.goal[escaping], crowd.walls) | crowd.holding[escaping]
+        clear = ~crowd.wall_grid.crossed(crowd.pos[escaping], crowd.goal[escaping]) | crowd.holding[escaping]
         crowd.escape[escaping[clear]] = 0.0
         stuck = np.flatnonzero(crowd.slow_time >= self.stuck_time)
         if len(stuck) == 0 or len(crowd.walls) == 0:
@@ -288,7 +288,7 @@ class Escapes:
         turning = crowd.escape[stuck] != 0
         crowd.escape[stuck[turning]] *= -1.0
         stuck = stuck[~turning]
-        hidden = segments_cross(crowd.pos[stuck], crowd.goal[stuck], crowd.walls)
+        hidden = crowd.wall_grid.crossed(crowd.pos[stuck], crowd.goal[stuck])
         crowd.squeeze_until[stuck[~hidden]] = crowd.t + self.stuck_time
         start = stuck[hidden]
         start = start[closest_on_segments(crowd.pos[start], crowd.walls)[1].min(axis=1) < crowd.radius[start] + 0.3]

@@ -12,7 +12,8 @@ import numpy as np
 import pymunk
 import pymunk.batch as batch
 
-from scenarios.geometry import near_segments, pair_vectors
+from pipeline.compiled import kernel
+from scenarios.wall_grid import WallGrid, away_from_wall, near_walls
 
 PERSON_MASS = 80.0  # kg; one mass for all: only ratios matter to the contact solver
 ITERATIONS = 40  # Chipmunk solver iterations per substep
@@ -112,19 +113,28 @@ class ContactSolver:
         return out
 
 
-def push_out_of_walls(pos: np.ndarray, radius: np.ndarray, walls: np.ndarray) -> None:
-    """Move every body (``pos`` [n, 2], in place) that overlaps a wall out along the wall's normal, the deepest
-    overlap first (summing pushes from the two walls of a corner would over-correct); a few passes settle corners."""
-    if len(walls) == 0 or len(pos) == 0:
-        return
-    for _ in range(WALL_PASSES):
-        p, s = near_segments(pos, walls, radius)
-        away, dist = pair_vectors(pos, walls, p, s)
-        depth = radius[p] - dist
-        inside = depth > 0
-        if not inside.any():
-            return
-        p, away, dist, depth = p[inside], away[inside], dist[inside], depth[inside]
-        order = np.lexsort((-depth, p))
-        first = order[np.unique(p[order], return_index=True)[1]]  # each body's deepest wall
-        pos[p[first]] += (depth[first] / np.maximum(dist[first], 1e-12))[:, None] * away[first]
+def push_out_of_walls(pos: np.ndarray, radius: np.ndarray, grid: WallGrid) -> None:
+    """Move every body (``pos`` [n, 2], in place) that overlaps a wall of ``grid`` out along the wall's normal, the
+    deepest overlap first (summing pushes from the two walls of a corner would over-correct); a few passes settle
+    corners."""
+    _push_out(pos, radius, WALL_PASSES, *grid.arrays())
+
+
+@kernel
+def _push_out(pos, radius, passes, walls, origin, cell, columns, rows, start, members):
+    seen, near = np.full(len(walls), -1, np.int64), np.empty(len(walls), np.int64)
+    for i in range(len(pos)):
+        for attempt in range(passes):
+            count = near_walls(pos[i, 0], pos[i, 1], radius[i], walls, origin, cell, columns, rows, start, members,
+                               seen, i * passes + attempt, near)
+            deepest, wall, out_x, out_y, out_d = 0.0, -1, 0.0, 0.0, 0.0
+            for k in range(count):  # the deepest overlap, the lowest-numbered wall of equally deep ones
+                wx, wy, dist = away_from_wall(pos[i, 0], pos[i, 1], walls, near[k])
+                depth = radius[i] - dist
+                if depth > deepest or (depth == deepest and depth > 0 and near[k] < wall):
+                    deepest, wall, out_x, out_y, out_d = depth, near[k], wx, wy, dist
+            if wall < 0:
+                break
+            scale = deepest / max(out_d, 1e-12)
+            pos[i, 0] += scale * out_x
+            pos[i, 1] += scale * out_y

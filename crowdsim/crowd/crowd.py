@@ -2,8 +2,8 @@
 contacts (crowdsim.crowd.contacts), with what they do (sources, routes, queues, attractions, sinks, escapes) in
 crowdsim.crowd.behaviours.
 
-Every per-step computation works on arrays over agents or over neighbour pairs found with a k-d tree, so a step
-costs O(N log N), not O(N^2). Social forces steer; pymunk then moves the bodies and resolves their contacts (the
+The forces are compiled kernels over persons, over neighbour pairs (every pair in a small crowd, a k-d tree's in a
+large one, so a step costs O(N log N), not O(N^2)) and over the walls of a grid near each person. Social forces steer; pymunk then moves the bodies and resolves their contacts (the
 force model alone does not keep bodies apart), and a last geometric pass keeps every body out of the walls.
 """
 
@@ -12,10 +12,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
-
-from scenarios.geometry import segments_cross, wall_segments
+from scenarios.geometry import wall_segments
 from scenarios.typed import Scenario
+from scenarios.wall_grid import WallGrid
 
 from . import forces
 from .behaviours import (AgentTypes, Attractions, Escapes, GroupIds, PerAgent, Queues, Routes, Sources, place_clusters,
@@ -66,6 +65,7 @@ class Crowd:
         self.rng = rng
         self.t = 0.0
         self.walls = wall_segments(scenario)
+        self.wall_grid = WallGrid.of(self.walls)
         self.contacts = ContactSolver(self.walls, scenario.robot.radius, self.p.max_agents)
         self._robot_pos: np.ndarray | None = None
         self._next_id = 1
@@ -144,30 +144,20 @@ class Crowd:
         self.escapes.steer(self, e)
         return e, speed
 
-    def interaction_forces(self, e: np.ndarray, holding: np.ndarray) -> np.ndarray:
-        """The configured agent-agent force over neighbour pairs from a k-d tree (O(N log N), not O(N^2))."""
-        p = self.p
-        n = len(self.pos)
-        # an unbalanced tree builds faster and queries no slower for crowds
-        tree = cKDTree(self.pos, balanced_tree=False, compact_nodes=False) if n > 1 else None
-        pairs = (tree.query_pairs(p.interaction_range, output_type="ndarray") if n > 1
-                 else np.zeros((0, 2), np.int64))
-        return forces.pair_forces(p, self.pos, self.vel, e, pairs, walking=~holding)
-
     def acceleration(self, e: np.ndarray, speed: np.ndarray, holding: np.ndarray, robot_pos: np.ndarray | None,
                      robot_radius: float) -> np.ndarray:
         """The sum of every force term on every agent, walking in directions ``e`` at desired ``speed``."""
         p = self.p
         acc = forces.desired_force(e, speed, self.vel, p.relaxation_time)
-        acc += self.interaction_forces(e, holding)
-        acc += forces.wall_force(self.pos, self.radius, e, self.walls, p.wall_strength, p.wall_range,
+        acc += forces.pair_forces(p, self.pos, self.vel, e, ~holding)
+        acc += forces.wall_force(self.pos, self.radius, e, self.wall_grid, p.wall_strength, p.wall_range,
                                  p.wall_interaction_range, p.fov_deg, p.out_of_view_weight
                                  ) * self.escapes.repelled_by_walls(self)[:, None]
         walking_groups = np.where(holding, -1, self.group)
         acc += forces.group_forces(self.pos, self.vel, e, self.radius, walking_groups, p.group_gaze,
                                    p.group_coherence, p.group_repulsion)
         if robot_pos is not None:
-            acc += forces.obstacle_disc_force(self.pos, e, robot_pos, robot_radius, p.robot_strength,
+            acc += forces.obstacle_disc_force(self.pos, e, robot_pos[0], robot_pos[1], robot_radius, p.robot_strength,
                                               p.robot_range, p.fov_deg, p.out_of_view_weight)
         if p.random_force > 0:
             acc += self.rng.normal(0.0, p.random_force, acc.shape)
@@ -198,9 +188,9 @@ class Crowd:
                 robot_vel = (robot_pos - self._robot_pos) / dt
             parked = np.array([1e6, 1e6])  # no robot in this simulation: its disc waits far away
             self.pos = self.contacts.step(self.pos, vel, dt, parked if robot_pos is None else robot_pos, robot_vel)
-            push_out_of_walls(self.pos, self.radius, self.walls)  # Chipmunk tolerates a little overlap; walls get none
+            push_out_of_walls(self.pos, self.radius, self.wall_grid)  # Chipmunk tolerates a little overlap; walls get none
             # pushes from a dense crowd can carry a body across a thin wall within one step: such a body stays put
-            crossed = segments_cross(before, self.pos, self.walls)
+            crossed = self.wall_grid.crossed(before, self.pos)
             self.pos[crossed] = before[crossed]
             self.vel = (self.pos - before) / dt
             self.walked += np.linalg.norm(self.vel, axis=1) * dt

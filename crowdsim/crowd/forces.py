@@ -1,22 +1,23 @@
-"""The social-force terms, each a pure function on arrays (accelerations in m/s^2), so each can be tested alone.
+"""The social-force terms (accelerations in m/s^2), each a compiled kernel on arrays, so each can be tested alone.
 
-Agent-agent terms work on directed neighbour pairs (i, j): the force that j exerts on i, summed per i with
-``np.bincount``. Nothing here loops over agents.
+Agent-agent terms run over neighbour pairs (i, j): one evaluation gives the force j exerts on i and the one i exerts
+on j. The scalar forms (``moussaid_pair``, ``seen_weight``) are shared with the environments' worlds
+(``crowdsim.envs.world``), so both simulate one force model from one implementation.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from scipy.spatial import cKDTree
 
-from scenarios.geometry import near_segments, pair_vectors
+from pipeline.compiled import kernel
 from scenarios.typed import Section
-
+from scenarios.wall_grid import WallGrid, away_from_wall, near_walls
 
 NEGLIGIBLE = 0.005  # m/s^2: an interaction weaker than this (0.1% of Moussaid's A) is not computed
-
-
-def _sum_per_agent(i: np.ndarray, fx: np.ndarray, fy: np.ndarray, n: int) -> np.ndarray:
-    return np.stack([np.bincount(i, fx, n), np.bincount(i, fy, n)], axis=1)
+EVERY_PAIR = 200  # persons up to which every pair is tested directly: below, a k-d tree costs more than it saves
 
 
 def desired_force(direction: np.ndarray, speed: np.ndarray, vel: np.ndarray, tau: float) -> np.ndarray:
@@ -24,182 +25,191 @@ def desired_force(direction: np.ndarray, speed: np.ndarray, vel: np.ndarray, tau
     return (speed[:, None] * direction - vel) / tau
 
 
-def moussaid2009(pos: np.ndarray, vel: np.ndarray, pairs: np.ndarray, strength: float, lam: float, gamma: float,
-                 n: float, n_prime: float, walking: np.ndarray | None = None, direction: np.ndarray | None = None,
-                 fov_deg: float = 360.0, out_of_view: float = 1.0) -> np.ndarray:
-    """Moussaid, Helbing et al. 2009 (Proc. R. Soc. B 276) agent interaction, the form PedSim uses.
+@kernel
+def seen_weight(hx, hy, fx, fy, cos_half, out_of_view):
+    """Helbing & Molnar 1995 anisotropy: weight 1 when the force's source lies within the field of view of a walker
+    heading (hx, hy) (a force pointing against the heading, within half the field of view ``cos_half`` = cos(phi)),
+    ``out_of_view`` (c) otherwise."""
+    if -(hx * fx + hy * fy) >= math.sqrt(fx * fx + fy * fy) * cos_half:
+        return 1.0
+    return out_of_view
+
+
+@kernel
+def moussaid_reach(strength, gamma):
+    """How far (in units of |D|) the Moussaid force can stay above NEGLIGIBLE: A exp(-d / (gamma |D|)) bounds it."""
+    return gamma * math.log(strength / NEGLIGIBLE) if strength > NEGLIGIBLE else 0.0
+
+
+@kernel
+def moussaid_pair(dx, dy, dvx, dvy, strength, lam, gamma, n, n_prime, reach):
+    """Moussaid, Helbing et al. 2009 (Proc. R. Soc. B 276) between persons i and j, the form PedSim uses, from
+    their differences j - i in position (dx, dy) and velocity (dvx, dvy).
 
     With e the unit vector from i to j and d their distance, the interaction vector D = lam (v_i - v_j) + e
     points along t = D / |D|; B = gamma |D|; theta is the signed angle from t to e. The force decelerates i along t
     and turns it away from j's side:
         f = -A exp(-d / B) [exp(-(n' B theta)^2) t + K exp(-(n B theta)^2) n_left],  K = sign(theta).
-    At theta = 0 (a perfectly symmetric head-on meeting) there is no turning term, as in the paper
-    (K = theta / |theta|); the random force breaks such ties. The turning term steers walkers round each other, so
-    agents not ``walking`` (standing people) feel only the braking term, else they would circle each other.
-
-    ``pairs`` [m, 2] are unordered: seen from j, D and t change sign while |D|, B and theta do not, so one
-    evaluation gives both forces (f_j = -f_i but for whose turning term applies). With ``direction`` (the walking
-    directions) the field-of-view weighting of Helbing & Molnar 1995 applies: people react less to those behind,
-    which is what makes a dense crowd slow down (else pushes from behind cancel the braking from the front).
-    """
-    count = len(pos)
-    # single precision for the pair arithmetic: it is memory-bound, and forces need no more than 7 digits
-    state = np.concatenate([pos, vel], axis=1).astype(np.float32)
-    # one [m, 4] difference (j - i: position, velocity) instead of a temporary per component
-    diff = np.take(state, pairs[:, 1], axis=0)
-    diff -= np.take(state, pairs[:, 0], axis=0)
-    lam, gamma, strength = np.float32(lam), np.float32(gamma), np.float32(strength)
-    d = np.sqrt(np.einsum("ij,ij->i", diff[:, :2], diff[:, :2]))
-    np.maximum(d, 1e-9, out=d)
-    ex, ey = diff[:, 0] / d, diff[:, 1] / d
-    Dx, Dy = ex - lam * diff[:, 2], ey - lam * diff[:, 3]  # lam (v_i - v_j) + e
-    nD = np.sqrt(Dx * Dx + Dy * Dy)
-    # neither term exceeds A exp(-d / B), B = gamma |D|: pairs whose force cannot reach NEGLIGIBLE m/s^2 are
-    # dropped before the costly part (in a crowd walking one way, about 40% of the pairs within range)
-    reach = np.float32(gamma * np.log(strength / NEGLIGIBLE) if strength > NEGLIGIBLE else 0.0)
-    near = np.flatnonzero(d < reach * nD)
-    d, ex, ey, Dx, Dy = d[near], ex[near], ey[near], Dx[near], Dy[near]
-    nD = np.maximum(nD[near], 1e-9)
+    Returns the braking part (bx, by) and the turning part (sx, sy) of the force on i. Seen from j, D and t change
+    sign while |D|, B and theta do not, so j feels -(b + s): one evaluation gives both. At theta = 0 (a perfectly
+    symmetric head-on meeting) there is no turning term, as in the paper (K = theta / |theta|); the random force
+    breaks such ties. A pair whose force cannot reach NEGLIGIBLE (d >= ``reach`` |D|) gives zeros."""
+    d = max(math.sqrt(dx * dx + dy * dy), 1e-9)
+    ex, ey = dx / d, dy / d
+    Dx, Dy = ex - lam * dvx, ey - lam * dvy
+    nD = math.sqrt(Dx * Dx + Dy * Dy)
+    if not d < reach * nD:
+        return 0.0, 0.0, 0.0, 0.0
+    nD = max(nD, 1e-9)
     tx, ty = Dx / nD, Dy / nD
-    theta = np.arctan2(tx * ey - ty * ex, tx * ex + ty * ey)
+    theta = math.atan2(tx * ey - ty * ex, tx * ex + ty * ey)
     B = gamma * nD
-    base = -strength * np.exp(-d / B)
-    along = base * np.exp(-(n_prime * B * theta) ** 2)
-    side = base * np.sign(theta) * np.exp(-(n * B * theta) ** 2)
-    i, j = pairs[near, 0], pairs[near, 1]
-    cos_half = np.float32(np.cos(np.radians(fov_deg) / 2))
-    heading = None if direction is None or out_of_view >= 1.0 else direction.astype(np.float32)
-    total = np.zeros((count, 2))
-    # i feels f, j feels -f (t and n_left flip sign for j), each with its own turning flag and view weight
-    for who, sign in ((i, 1.0), (j, -1.0)):
-        turn = side if walking is None else side * walking[who]
-        fx = sign * (along * tx - turn * ty)  # n_left = (-t_y, t_x)
-        fy = sign * (along * ty + turn * tx)
-        if heading is not None:  # in_view_weight, on components: this is the hot path
-            seen = -(np.take(heading[:, 0], who) * fx + np.take(heading[:, 1], who) * fy) >= (
-                np.sqrt(fx * fx + fy * fy) * cos_half)
-            w = np.where(seen, np.float32(1.0), np.float32(out_of_view))
-            fx, fy = fx * w, fy * w
-        total += _sum_per_agent(who, fx, fy, count)
+    base = -strength * math.exp(-d / B)
+    along = base * math.exp(-(n_prime * B * theta) ** 2)
+    side = base * np.sign(theta) * math.exp(-(n * B * theta) ** 2)
+    return along * tx, along * ty, -side * ty, side * tx  # n_left = (-t_y, t_x)
+
+
+@kernel
+def moussaid2009(pos, vel, pairs, every_pair, interaction_range, strength, lam, gamma, n, n_prime, walking, direction,
+                 fov_deg, out_of_view):
+    """``moussaid_pair`` summed per person [n, 2] over the unordered ``pairs`` [m, 2] (or, with ``every_pair``,
+    over every two persons within ``interaction_range``). The turning term steers walkers round each other, so
+    persons not ``walking`` (standing people) feel only the braking term, else they would circle each other. Each
+    force is weighted by the field of view round the person's walking ``direction`` (Helbing & Molnar 1995):
+    people react less to those behind, which is what makes a dense crowd slow down (else pushes from behind cancel
+    the braking from the front)."""
+    total = np.zeros((len(pos), 2))
+    reach = moussaid_reach(strength, gamma)
+    cos_half = math.cos(math.radians(fov_deg) / 2)
+    if every_pair:
+        for i in range(len(pos)):
+            for j in range(i + 1, len(pos)):
+                dx, dy = pos[j, 0] - pos[i, 0], pos[j, 1] - pos[i, 1]
+                if dx * dx + dy * dy <= interaction_range * interaction_range:
+                    _add_moussaid(total, i, j, pos, vel, walking, direction, strength, lam, gamma, n, n_prime, reach,
+                                  cos_half, out_of_view)
+    else:
+        for k in range(len(pairs)):
+            _add_moussaid(total, pairs[k, 0], pairs[k, 1], pos, vel, walking, direction, strength, lam, gamma, n,
+                          n_prime, reach, cos_half, out_of_view)
     return total
 
 
-def moussaid2009_dense(z: np.ndarray, v: np.ndarray, e: np.ndarray, strength: float, lam: float, gamma: float,
-                       n: float, n_prime: float, fov_deg: float, out_of_view: float) -> np.ndarray:
-    """``moussaid2009`` between every two persons of each of many small worlds, everyone walking: positions,
-    velocities and walking directions [E, N] as complex numbers x + iy; returns the forces [E, N] likewise.
-
-    For worlds of a few tens of people the cost is the number of array calls, not their size: dense [E, N, N] arrays
-    and complex numbers (a rotation by 90 degrees is a product by i, the signed angle from t to e that of conj(t) e)
-    give the same force in a quarter of ``moussaid2009``'s calls (a test keeps the two equal)."""
-    dz = z[:, None, :] - z[:, :, None]  # [e, i, j]: j - i
-    d = np.abs(dz)
-    d += _far(z.shape[1])  # no one pushes themselves
-    dz /= d  # the unit vector e from i to j
-    t = dz - lam * (v[:, None, :] - v[:, :, None])  # D = lam (v_i - v_j) + e
-    B = np.abs(t)
-    np.maximum(B, 1e-9, out=B)
-    t /= B
-    theta = np.angle(t.conjugate() * dz)
-    B *= gamma
-    base = np.exp(-d / B)
-    base *= -strength
-    B *= theta
-    B *= B  # (B theta)^2
-    f = base * np.exp(-n_prime * n_prime * B) + 1j * (base * np.sign(theta) * np.exp(-n * n * B))
-    f *= t  # along t, and turning along n_left = i t
-    if out_of_view < 1.0:
-        seen = -(e.conjugate()[:, :, None] * f).real >= np.abs(f) * np.cos(np.radians(fov_deg) / 2)
-        f *= np.where(seen, 1.0, out_of_view)
-    return f.sum(axis=2)
+@kernel
+def _add_moussaid(total, i, j, pos, vel, walking, direction, strength, lam, gamma, n, n_prime, reach, cos_half,
+                  out_of_view):
+    """The pair (i, j)'s forces on both, each with its own turning flag and view weight, added to ``total``."""
+    bx, by, sx, sy = moussaid_pair(pos[j, 0] - pos[i, 0], pos[j, 1] - pos[i, 1], vel[j, 0] - vel[i, 0],
+                                   vel[j, 1] - vel[i, 1], strength, lam, gamma, n, n_prime, reach)
+    if bx == 0.0 and by == 0.0 and sx == 0.0 and sy == 0.0:  # negligible
+        return
+    for who, sign in ((i, 1.0), (j, -1.0)):
+        turn = 1.0 if walking[who] else 0.0
+        fx, fy = sign * (bx + turn * sx), sign * (by + turn * sy)
+        w = seen_weight(direction[who, 0], direction[who, 1], fx, fy, cos_half, out_of_view)
+        total[who, 0] += w * fx
+        total[who, 1] += w * fy
 
 
-_FAR = {}
-
-
-def _far(n: int) -> np.ndarray:
-    """An [n, n] matrix, 1e9 on the diagonal: added to distances, a person's pair with themselves is out of reach."""
-    if n not in _FAR:
-        _FAR[n] = np.eye(n) * 1e9
-    return _FAR[n]
-
-
-def pair_forces(p: Section, pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, pairs: np.ndarray,
-                walking: np.ndarray | None = None) -> np.ndarray:
-    """The agent-agent force the crowd parameters ``p`` choose (``interaction``), over unordered neighbour
-    ``pairs`` [m, 2], summed per agent."""
-    if len(pairs) == 0:
-        return np.zeros((len(pos), 2))
-    if p.interaction == "moussaid2009":
-        return moussaid2009(pos, vel, pairs, p.moussaid_strength, p.moussaid_lambda, p.moussaid_gamma,
-                            p.moussaid_n, p.moussaid_n_prime, walking=walking, direction=direction,
-                            fov_deg=p.fov_deg, out_of_view=p.out_of_view_weight)
-    i = np.concatenate([pairs[:, 0], pairs[:, 1]])
-    j = np.concatenate([pairs[:, 1], pairs[:, 0]])
-    return helbing_molnar1995(pos, vel, direction, i, j, p.agent_strength, p.agent_range, p.step_time,
-                              p.fov_deg, p.out_of_view_weight)
-
-
-def in_view_weight(direction: np.ndarray, force: np.ndarray, fov_deg: float, out_of_view: float) -> np.ndarray:
-    """Helbing & Molnar 1995 anisotropy: weight 1 when the force's source lies within the field of view (a force
-    pointing against the walking direction), ``out_of_view`` (c) otherwise."""
-    norm = np.linalg.norm(force, axis=-1)
-    seen = np.einsum("...k,...k->...", direction, -force) >= norm * np.cos(np.radians(fov_deg) / 2)
-    return np.where(seen, 1.0, out_of_view)
-
-
-def helbing_molnar1995(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, i: np.ndarray, j: np.ndarray,
-                       strength: float, sigma: float, step_time: float, fov_deg: float,
-                       out_of_view: float) -> np.ndarray:
+@kernel
+def helbing_molnar1995(pos, vel, direction, pairs, strength, sigma, step_time, fov_deg, out_of_view):
     """Helbing & Molnar 1995 elliptical repulsion V(b) = V0 exp(-b / sigma), with
-    2b = sqrt((|r| + |r - s e_j|)^2 - s^2), s = |v_j| step_time, and the field-of-view weighting."""
-    count = len(pos)
-    rx, ry = pos[i, 0] - pos[j, 0], pos[i, 1] - pos[j, 1]
-    vx, vy = vel[j, 0], vel[j, 1]
-    step = np.sqrt(vx * vx + vy * vy) * step_time
-    yx, yy = rx - step_time * vx, ry - step_time * vy  # r - s e_j
-    nr = np.maximum(np.sqrt(rx * rx + ry * ry), 1e-6)
-    ny = np.maximum(np.sqrt(yx * yx + yy * yy), 1e-6)
-    b = 0.5 * np.sqrt(np.maximum((nr + ny) ** 2 - step**2, 0.0))
-    b = np.maximum(b, 0.05)  # keeps the gradient finite when i stands exactly in j's path
-    mag = strength / sigma * np.exp(-b / sigma) * (nr + ny) / (4 * b)
-    fx = mag * (rx / nr + yx / ny)
-    fy = mag * (ry / nr + yy / ny)
-    w = in_view_weight(direction[i], np.stack([fx, fy], 1), fov_deg, out_of_view)
-    return _sum_per_agent(i, w * fx, w * fy, count)
+    2b = sqrt((|r| + |r - s e_j|)^2 - s^2), s = |v_j| step_time, and the field-of-view weighting, summed per person
+    over both directions of each unordered pair [m, 2]."""
+    total = np.zeros((len(pos), 2))
+    cos_half = math.cos(math.radians(fov_deg) / 2)
+    for k in range(2 * len(pairs)):
+        i, j = (pairs[k, 0], pairs[k, 1]) if k < len(pairs) else (pairs[k - len(pairs), 1], pairs[k - len(pairs), 0])
+        rx, ry = pos[i, 0] - pos[j, 0], pos[i, 1] - pos[j, 1]
+        vx, vy = vel[j, 0], vel[j, 1]
+        step = math.sqrt(vx * vx + vy * vy) * step_time
+        yx, yy = rx - step_time * vx, ry - step_time * vy  # r - s e_j
+        nr = max(math.sqrt(rx * rx + ry * ry), 1e-6)
+        ny = max(math.sqrt(yx * yx + yy * yy), 1e-6)
+        b = 0.5 * math.sqrt(max((nr + ny) ** 2 - step ** 2, 0.0))
+        b = max(b, 0.05)  # keeps the gradient finite when i stands exactly in j's path
+        mag = strength / sigma * math.exp(-b / sigma) * (nr + ny) / (4 * b)
+        fx, fy = mag * (rx / nr + yx / ny), mag * (ry / nr + yy / ny)
+        w = seen_weight(direction[i, 0], direction[i, 1], fx, fy, cos_half, out_of_view)
+        total[i, 0] += w * fx
+        total[i, 1] += w * fy
+    return total
 
 
-def wall_force(pos: np.ndarray, radius: np.ndarray, direction: np.ndarray, walls: np.ndarray, strength: float,
+def neighbour_pairs(pos: np.ndarray, reach: float) -> np.ndarray:
+    """Unordered index pairs [m, 2] of persons within ``reach`` of each other, from a k-d tree (O(N log N))."""
+    if len(pos) < 2:
+        return np.zeros((0, 2), np.int64)
+    # an unbalanced tree builds faster and queries no slower for crowds
+    return cKDTree(pos, balanced_tree=False, compact_nodes=False).query_pairs(reach, output_type="ndarray")
+
+
+def pair_forces(p: Section, pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, walking: np.ndarray) -> np.ndarray:
+    """The agent-agent force the crowd parameters ``p`` choose (``interaction``) between persons within
+    ``interaction_range``, summed per person: every pair tested directly in a small crowd, the pairs from a k-d tree
+    in a large one (the same pairs)."""
+    if p.interaction == "moussaid2009":
+        every = len(pos) <= EVERY_PAIR
+        pairs = np.zeros((0, 2), np.int64) if every else neighbour_pairs(pos, p.interaction_range)
+        return moussaid2009(pos, vel, pairs, every, p.interaction_range, p.moussaid_strength, p.moussaid_lambda,
+                            p.moussaid_gamma, p.moussaid_n, p.moussaid_n_prime, walking, direction, p.fov_deg,
+                            p.out_of_view_weight)
+    return helbing_molnar1995(pos, vel, direction, neighbour_pairs(pos, p.interaction_range), p.agent_strength,
+                              p.agent_range, p.step_time, p.fov_deg, p.out_of_view_weight)
+
+
+def wall_force(pos: np.ndarray, radius: np.ndarray, direction: np.ndarray, grid: WallGrid, strength: float,
                length: float, reach: float, fov_deg: float, out_of_view: float) -> np.ndarray:
     """Wall repulsion A exp(-(d - r) / B) on the gap between body and wall (Helbing, Farkas & Vicsek 2000: A = 2000 N
-    on 80 kg, B = 0.08 m) from every segment nearer than ``reach``, summed; a corner shared by two segments repels
-    once."""
-    if len(walls) == 0 or len(pos) == 0:
-        return np.zeros_like(pos)
-    p, s = near_segments(pos, walls, reach)
-    away, dist = pair_vectors(pos, walls, p, s)
-    near = dist < reach
-    p, away, dist = p[near], away[near], dist[near]
-    # a corner where two segments meet is one wall point, not two: count each (agent, closest point) once
-    closest = np.round((pos[p] - away) / 1e-6)
-    order = np.lexsort((closest[:, 1], closest[:, 0], p))
-    same = np.zeros(len(order), bool)
-    same[1:] = (p[order][1:] == p[order][:-1]) & (closest[order][1:] == closest[order][:-1]).all(axis=1)
-    keep = order[~same]
-    p, away, dist = p[keep], away[keep], dist[keep]
-    f = (strength * np.exp(-(dist - radius[p]) / length) / np.maximum(dist, 1e-9))[:, None] * away
-    f *= in_view_weight(direction[p], f, fov_deg, out_of_view)[:, None]
-    return _sum_per_agent(p, f[:, 0], f[:, 1], len(pos))
+    on 80 kg, B = 0.08 m) from every wall of ``grid`` nearer than ``reach``, summed, each weighted by the field of
+    view; a corner shared by two segments repels once."""
+    return _wall_force(pos, radius, direction, strength, length, reach, fov_deg, out_of_view, *grid.arrays())
 
 
-def obstacle_disc_force(pos: np.ndarray, direction: np.ndarray, centre: np.ndarray, radius: float,
-                        strength: float, length: float, fov_deg: float, out_of_view: float) -> np.ndarray:
-    """Repulsion from a disc (the robot): U/R exp(-gap/R) with gap the distance to its rim."""
-    away = pos - centre
-    dist = np.maximum(np.linalg.norm(away, axis=1), 1e-9)
-    gap = np.maximum(dist - radius, 0.0)
-    f = (strength / length * np.exp(-gap / length))[:, None] * away / dist[:, None]
-    return f * in_view_weight(direction, f, fov_deg, out_of_view)[:, None]
+@kernel
+def _wall_force(pos, radius, direction, strength, length, reach, fov_deg, out_of_view, walls, origin, cell, columns,
+                rows, start, members):
+    f = np.zeros((len(pos), 2))
+    cos_half = math.cos(math.radians(fov_deg) / 2)
+    seen, near = np.full(len(walls), -1, np.int64), np.empty(len(walls), np.int64)
+    corners = np.empty((len(walls), 2))  # the closest wall points already counted, in micrometres
+    for i in range(len(pos)):
+        x, y = pos[i, 0], pos[i, 1]
+        kept = 0
+        for k in range(near_walls(x, y, reach, walls, origin, cell, columns, rows, start, members, seen, i, near)):
+            wx, wy, dist = away_from_wall(x, y, walls, near[k])
+            if not dist < reach:
+                continue
+            cx, cy = math.floor((x - wx) * 1e6 + 0.5), math.floor((y - wy) * 1e6 + 0.5)
+            counted = False
+            for q in range(kept):
+                counted |= corners[q, 0] == cx and corners[q, 1] == cy
+            if counted:  # a corner where two segments meet is one wall point, not two
+                continue
+            corners[kept, 0], corners[kept, 1] = cx, cy
+            kept += 1
+            mag = strength * math.exp(-(dist - radius[i]) / length) / max(dist, 1e-9)
+            w = seen_weight(direction[i, 0], direction[i, 1], mag * wx, mag * wy, cos_half, out_of_view)
+            f[i, 0] += w * mag * wx
+            f[i, 1] += w * mag * wy
+    return f
+
+
+@kernel
+def obstacle_disc_force(pos, direction, cx, cy, radius, strength, length, fov_deg, out_of_view):
+    """Repulsion from a disc (the robot) centred at (cx, cy): U/R exp(-gap/R) with gap the distance to its rim,
+    weighted by the field of view."""
+    f = np.zeros((len(pos), 2))
+    cos_half = math.cos(math.radians(fov_deg) / 2)
+    for i in range(len(pos)):
+        ax, ay = pos[i, 0] - cx, pos[i, 1] - cy
+        dist = max(math.sqrt(ax * ax + ay * ay), 1e-9)
+        mag = strength / length * math.exp(-max(dist - radius, 0.0) / length) / dist
+        fx, fy = mag * ax, mag * ay
+        w = seen_weight(direction[i, 0], direction[i, 1], fx, fy, cos_half, out_of_view)
+        f[i, 0], f[i, 1] = w * fx, w * fy
+    return f
 
 
 def group_forces(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, radius: np.ndarray, group: np.ndarray,
@@ -211,45 +221,56 @@ def group_forces(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, radius
     half-angle ``vision_deg``); coherence: beta2 towards the group's centre once farther than (N - 1) / 2 m;
     repulsion: beta3 away from each member nearer than the two radii plus ``margin``.
     """
-    f = np.zeros_like(pos)
-    idx = np.flatnonzero(group >= 0)
-    if len(idx) < 2:  # no group of two: no force, and none of the work below (a crowd step's 0.3 ms at 100 agents)
-        return f
-    _, g, size = np.unique(group[idx], return_inverse=True, return_counts=True)
-    size_i = size[g]
-    total = np.stack([np.bincount(g, pos[idx, 0]), np.bincount(g, pos[idx, 1])], 1)
-    centroid = total[g] / size_i[:, None]
-    others = (total[g] - pos[idx]) / np.maximum(size_i - 1, 1)[:, None]  # centre of the other members
-    # coherence
-    to_c = centroid - pos[idx]
-    dist_c = np.linalg.norm(to_c, axis=1)
-    pull = (size_i > 1) & (dist_c > (size_i - 1) / 2)
-    f[idx[pull]] += coherence * to_c[pull] / dist_c[pull, None]
-    # gaze
-    to_o = others - pos[idx]
-    heading = direction[idx]
-    cosang = np.einsum("ij,ij->i", heading, to_o) / np.maximum(np.linalg.norm(to_o, axis=1), 1e-9)
-    alpha = np.maximum(np.arccos(np.clip(cosang, -1, 1)) - np.radians(vision_deg), 0.0)
-    f[idx] += -gaze * alpha[:, None] * vel[idx] * (size_i > 1)[:, None]
-    # repulsion between members
-    a, b = pairs_within_groups(g)
-    d = pos[idx[a]] - pos[idx[b]]
-    dist = np.maximum(np.linalg.norm(d, axis=1), 1e-9)
-    near = dist < radius[idx[a]] + radius[idx[b]] + margin
-    push = repulsion * d[near] / dist[near, None]
-    np.add.at(f, idx[a[near]], push)
+    members = np.flatnonzero(group >= 0)
+    if len(members) < 2:  # no group of two: no force, and none of the work
+        return np.zeros_like(pos)
+    labels, label = np.unique(group[members], return_inverse=True)
+    return _group_forces(pos, vel, direction, radius, members, label, len(labels), gaze, coherence, repulsion,
+                         math.radians(vision_deg), margin)
+
+
+@kernel
+def _group_forces(pos, vel, direction, radius, members, label, groups, gaze, coherence, repulsion, vision, margin):
+    """``group_forces`` for ``members`` (indices into the persons) of groups ``label`` (0 .. groups - 1)."""
+    f = np.zeros((len(pos), 2))
+    size = np.zeros(groups, np.int64)
+    total = np.zeros((groups, 2))
+    for k in range(len(members)):
+        size[label[k]] += 1
+        total[label[k], 0] += pos[members[k], 0]
+        total[label[k], 1] += pos[members[k], 1]
+    start = np.zeros(groups + 1, np.int64)  # each group's members, in order, at start[g]:start[g + 1] of ``order``
+    for g in range(groups):
+        start[g + 1] = start[g] + size[g]
+    order, filled = np.empty(len(members), np.int64), start[:-1].copy()
+    for k in range(len(members)):
+        order[filled[label[k]]] = k
+        filled[label[k]] += 1
+    for k in range(len(members)):
+        g, i = label[k], members[k]
+        n = size[g]
+        if n < 2:
+            continue
+        # coherence: towards the group's centre
+        cx, cy = total[g, 0] / n - pos[i, 0], total[g, 1] / n - pos[i, 1]
+        dist = math.sqrt(cx * cx + cy * cy)
+        if dist > (n - 1) / 2:
+            f[i, 0] += coherence * cx / dist
+            f[i, 1] += coherence * cy / dist
+        # gaze: the turn needed to keep the other members' centre in view
+        ox, oy = (total[g, 0] - pos[i, 0]) / (n - 1) - pos[i, 0], (total[g, 1] - pos[i, 1]) / (n - 1) - pos[i, 1]
+        cos = (direction[i, 0] * ox + direction[i, 1] * oy) / max(math.sqrt(ox * ox + oy * oy), 1e-9)
+        alpha = max(math.acos(min(max(cos, -1.0), 1.0)) - vision, 0.0)
+        f[i, 0] -= gaze * alpha * vel[i, 0]
+        f[i, 1] -= gaze * alpha * vel[i, 1]
+        # repulsion from each member too near
+        for m in range(start[g], start[g + 1]):
+            j = members[order[m]]
+            if j == i:
+                continue
+            dx, dy = pos[i, 0] - pos[j, 0], pos[i, 1] - pos[j, 1]
+            d = max(math.sqrt(dx * dx + dy * dy), 1e-9)
+            if d < radius[i] + radius[j] + margin:
+                f[i, 0] += repulsion * dx / d
+                f[i, 1] += repulsion * dy / d
     return f
-
-
-def pairs_within_groups(group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Every ordered pair (a, b), a != b, of indices whose ``group`` labels (0 .. G-1) are equal: a group of n
-    gives n (n - 1) pairs, a group of one none. Each member's partners come in the group's order."""
-    order = np.argsort(group, kind="stable")
-    size = np.bincount(group)
-    first = np.cumsum(size) - size  # where each group starts in ``order``
-    partners = size[group]
-    a = np.repeat(np.arange(len(group)), partners)
-    rank = np.arange(len(a)) - np.repeat(np.cumsum(partners) - partners, partners)  # 0 .. n-1 within each member
-    b = order[np.repeat(first[group], partners) + rank]
-    other = a != b
-    return a[other], b[other]

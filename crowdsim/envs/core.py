@@ -192,14 +192,8 @@ class Episodes:
         command = np.minimum(np.maximum(np.asarray(actions, float).reshape(self.n, 2), -1.0), 1.0) * self.top_speed
         draws = np.stack([g.normal(0.0, w.crowd_p.random_force, (self.ticks, 2, w.N)) for g in self.noise_rng], 2)
         noise = draws[:, 0] + 1j * draws[:, 1]  # [ticks, E, N]
-        gap = np.full(self.n, np.inf)
-        at_collision = {}  # episode -> its state at the tick of its first collision, for the log
-        for t in range(self.ticks):
-            tick_gap = w.tick(command, noise[t])
-            if (tick_gap < 0).any():
-                for k in np.flatnonzero((tick_gap < 0) & (gap >= 0)):
-                    at_collision[k] = self._state(k)
-            gap = np.minimum(gap, tick_gap)
+        gaps, at_collision = w.tick(command, noise)  # at_collision: episode -> its state at its first collision
+        gap = gaps.min(axis=0)
         self.elapsed += self.ticks * w.dt
         for k in range(self.n):
             if self.sensing:

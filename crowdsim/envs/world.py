@@ -15,9 +15,13 @@ pushed apart half the overlap each per tick, out of the robot's disc and into th
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from crowdsim.crowd import forces
+from pipeline.compiled import kernel
+from scenarios.wall_grid import WallGrid
 from crowdsim.crowd.behaviours import AgentTypes
 from crowdsim.robot import arc, limited
 from pipeline.frames import compose
@@ -61,8 +65,7 @@ class Worlds:
         self.goal = np.zeros((n_worlds, 2))
         self.t = np.zeros(n_worlds)
         self.size = (0.0, 0.0)
-        self._wall_gap, self._facing = np.zeros((4,) + shape), np.zeros((4,) + shape)
-        self._contact_distance = np.zeros((n_worlds, people, people))  # two radii, -inf on the diagonal
+        self._room = WallGrid.of(room_walls(self.size))
 
     # by component, as views (writing to them writes the state)
     x = property(lambda self: self.z.real)
@@ -92,7 +95,8 @@ class Worlds:
         width = lay.route.shape[1]
         if width != self.route.shape[2]:  # the layout's route width, known once the first is drawn
             self.route = np.zeros((self.E, self.N, width), complex)
-        self.size = lay.size
+        if lay.size != self.size:
+            self.size, self._room = lay.size, WallGrid.of(room_walls(lay.size))
         self.z[k] = lay.start[:, 0] + 1j * lay.start[:, 1]
         self.v[k], self.walked[k] = 0.0, 0.0
         v0 = self.types.desired_speeds(np.full(self.N, self.kind), rng)
@@ -100,107 +104,113 @@ class Worlds:
         self.route[k], self.route_length[k], self.place[k] = lay.route[..., 0] + 1j * lay.route[..., 1], \
             lay.route_length, 0
         self.goal_z[k] = self.route[k, :, 0]
-        reach = self.radius[k, :, None] + self.radius[k, None, :]
-        np.fill_diagonal(reach, -np.inf)  # no one overlaps themselves
-        self._contact_distance[k] = reach
         self.robot_pose[k], self.robot_velocity[k], self.goal[k], self.t[k] = lay.robot_start, 0.0, lay.robot_goal, 0.0
         return lay
 
-    def tick(self, command: np.ndarray, noise: np.ndarray) -> np.ndarray:
-        """Advance every world one step dt: the persons by their forces (``noise`` [E, N] the random force, complex),
-        the robots by ``command`` [E, 2] (v, omega) within their limits. Returns each world's smallest gap between
-        the robot's disc and a person's or a wall, before contacts push anyone apart [E] (negative: a collision)."""
-        p, dt = self.crowd_p, self.dt
-        self.robot_velocity = limited(command, self.robot_velocity, self.robot_p, dt)
-        self.robot_pose = compose(self.robot_pose, arc(self.robot_velocity[:, 0], self.robot_velocity[:, 1], dt))
-        self.t += dt
-        gap = self.robot_wall_gap()
-        if self.N == 0:
-            return gap
-        z, v, v0 = self.z, self.v, self.v0
-        e = self.goal_z - z
-        e /= np.maximum(np.abs(e), 1e-9)
-        acc = (v0 * e - v) / p.relaxation_time
-        acc += forces.moussaid2009_dense(z, v, e, p.moussaid_strength, p.moussaid_lambda, p.moussaid_gamma,
-                                         p.moussaid_n, p.moussaid_n_prime, p.fov_deg,
-                                         p.out_of_view_weight)
-        acc += self._wall_force(e)
-        robot = (self.robot_pose[:, 0] + 1j * self.robot_pose[:, 1])[:, None]
-        if self.robot_visible:
-            acc += self._robot_force(e, robot)
-        acc += noise
-        nv = v + acc * dt
-        back = np.minimum((nv * e.conjugate()).real, 0.0)  # pressure stops a walker; it does not walk them backwards
-        nv -= back * e
-        nv *= np.minimum(1.0, p.max_speed_factor * v0 / np.maximum(np.abs(nv), 1e-9))
-        nz = z + nv * dt
-        gap = np.minimum(gap, (np.abs(nz - robot) - self.radius - self.robot_radius).min(axis=1))
-        nz = self._contacts(nz)
-        self.v = (nz - z) / dt
-        self.z = nz
-        self.walked += np.abs(self.v) * dt
-        arrived = np.abs(self.goal_z - nz) < ARRIVED
-        if arrived.any():
-            self.place[arrived] = (self.place[arrived] + 1) % self.route_length[arrived]
-            self.goal_z[arrived] = self.route[arrived, self.place[arrived]]
-        return gap
-
-    def _in_view(self, e, f) -> np.ndarray:
-        """``forces.in_view_weight`` on complex vectors."""
-        p = self.crowd_p
-        seen = -(e.conjugate() * f).real >= np.abs(f) * np.cos(np.radians(p.fov_deg) / 2)
-        return np.where(seen, 1.0, p.out_of_view_weight)
-
-    def _robot_force(self, e, robot) -> np.ndarray:
-        """``forces.obstacle_disc_force`` from each world's robot (at ``robot`` [E, 1]) on its persons."""
-        p = self.crowd_p
-        away = self.z - robot
-        dist = np.maximum(np.abs(away), 1e-9)
-        f = away * (p.robot_strength / p.robot_range * np.exp(
-            -np.maximum(dist - self.robot_radius, 0.0) / p.robot_range) / dist)
-        return f * self._in_view(e, f)
-
-    def _wall_force(self, e) -> np.ndarray:
-        """``forces.wall_force`` from the room's four walls, whose normals are the axes: the gap to each wall is a
-        coordinate, and a wall is in view when the walker faces it within the field of view."""
-        p = self.crowd_p
-        w, h = self.size
-        x, y = self.z.real, self.z.imag
-        dist, facing = self._wall_gap, self._facing  # to the left, right, bottom and top walls
-        dist[0], dist[2] = x, y
-        np.subtract(w, x, out=dist[1])
-        np.subtract(h, y, out=dist[3])
-        facing[0], facing[2] = e.real, e.imag
-        np.negative(facing[0], out=facing[1])
-        np.negative(facing[2], out=facing[3])
-        facing = facing <= -np.cos(np.radians(p.fov_deg) / 2)  # the force (away from the wall) against e
-        mag = np.exp((self.radius - dist) / p.wall_range)
-        mag *= np.where(facing, p.wall_strength, p.wall_strength * p.out_of_view_weight)
-        mag *= dist < p.wall_interaction_range
-        return (mag[0] - mag[1]) + 1j * (mag[2] - mag[3])
-
-    def _contacts(self, z) -> np.ndarray:
-        """Overlapping persons apart (half the overlap each), everyone inside the room. Nobody is pushed off the
-        robot: an overlap with it is a collision, left for the episode to see (and, when the robot is visible, for
-        the person's repulsion from it to undo)."""
-        dz = z[:, None, :] - z[:, :, None]
-        d = np.abs(dz)
-        push = self._contact_distance - d
-        overlap = push > 0
-        if overlap.any():
-            push = np.divide(push, d, out=np.zeros_like(push), where=overlap)
-            z = z - 0.5 * (push * dz).sum(axis=2)
-        w, h = self.size
-        r = self.radius
-        return np.minimum(np.maximum(z.real, r), w - r) + 1j * np.minimum(np.maximum(z.imag, r), h - r)
-
-    def robot_wall_gap(self) -> np.ndarray:
-        """Distance from each robot's disc to the nearest wall of the room [E]."""
-        w, h = self.size
-        x, y = self.robot_pose[:, 0], self.robot_pose[:, 1]
-        return np.minimum(np.minimum(x, w - x), np.minimum(y, h - y)) - self.robot_radius
-
+    def tick(self, command: np.ndarray, noise: np.ndarray) -> tuple[np.ndarray, dict]:
+        """Advance every world len(noise) steps dt with ``command`` [E, 2] (v, omega) held: the robots within their
+        limits, the persons by their forces (``noise`` [ticks, E, N] the random force, complex). Returns each tick's
+        smallest gap between each world's robot disc and a person or a wall, before contacts push anyone apart
+        [ticks, E] (negative: a collision), and, for each world that collided in these ticks, its state (time,
+        robot pose, person positions and velocities) at the first of them."""
+        p, dt, ticks = self.crowd_p, self.dt, len(noise)
+        poses, stamps, velocity = np.empty((ticks, self.E, 3)), np.empty((ticks, self.E)), np.empty((ticks, self.E, 2))
+        for t in range(ticks):  # the robots first: nothing a person does moves them
+            self.robot_velocity = velocity[t] = limited(command, self.robot_velocity, self.robot_p, dt)
+        moves = arc(velocity[..., 0], velocity[..., 1], dt)
+        for t in range(ticks):
+            self.robot_pose = compose(self.robot_pose, moves[t])
+            self.t += dt
+            poses[t], stamps[t] = self.robot_pose, self.t
+        people = np.ascontiguousarray(noise).view(float).reshape(noise.shape + (2,))
+        gaps, hit_pos, hit_vel = _people_ticks(
+            _pairs(self.z), _pairs(self.v), self.v0, _pairs(self.goal_z), self.radius, self.walked,
+            _pairs(self.route), self.route_length, self.place, poses, self.robot_radius, self.robot_visible, people,
+            dt, self.size[0], self.size[1], p.relaxation_time, p.max_speed_factor, p.interaction_range,
+            p.moussaid_strength, p.moussaid_lambda, p.moussaid_gamma, p.moussaid_n, p.moussaid_n_prime, p.fov_deg,
+            p.out_of_view_weight, p.wall_strength, p.wall_range, p.wall_interaction_range, p.robot_strength,
+            p.robot_range, *self._room.arrays())
+        hit = {}
+        for k in np.flatnonzero((gaps < 0).any(axis=0)):
+            t = int(np.argmax(gaps[:, k] < 0))
+            hit[k] = (float(stamps[t, k]), poses[t, k].copy(), hit_pos[k].view(complex)[:, 0].copy(),
+                      hit_vel[k].view(complex)[:, 0].copy())
+        return gaps, hit
 
 def _pairs(z: np.ndarray) -> np.ndarray:
     """A contiguous complex array [...] as its (real, imaginary) pairs [..., 2], without a copy."""
     return z.view(float).reshape(z.shape + (2,))
+
+
+@kernel
+def _people_ticks(pos, vel, v0, goal, radius, walked, route, route_length, place, robot, robot_radius, robot_visible,
+                  noise, dt, width, height, tau, max_speed_factor, interaction_range, strength, lam, gamma, n, n_prime,
+                  fov_deg, out_of_view, wall_strength, wall_range, wall_reach, robot_strength, robot_range, walls, origin,
+                  cell, columns, rows, start, members):
+    """``Worlds.tick``'s persons, world by world and tick by tick, in place: the scenario crowd's forces
+    (``forces``: every pair, the room's walls, the robot's disc when visible), the random force ``noise``, the
+    crowd's speed limits, then contacts (half an overlap each, everyone inside the room). Returns the gaps
+    [ticks, E] and the positions and velocities at each world's first collision [E, N, 2]."""
+    ticks, worlds, people = noise.shape[0], pos.shape[0], pos.shape[1]
+    gaps = np.empty((ticks, worlds))
+    hit_pos, hit_vel = np.zeros((worlds, people, 2)), np.zeros((worlds, people, 2))
+    walking = np.ones(people, np.bool_)
+    for k in range(worlds):
+        z, v, r = pos[k], vel[k], radius[k]
+        for t in range(ticks):
+            rx, ry = robot[t, k, 0], robot[t, k, 1]
+            gap = min(min(rx, width - rx), min(ry, height - ry)) - robot_radius
+            e = np.empty((people, 2))
+            for i in range(people):
+                gx, gy = goal[k, i, 0] - z[i, 0], goal[k, i, 1] - z[i, 1]
+                norm = max(math.sqrt(gx * gx + gy * gy), 1e-9)
+                e[i, 0], e[i, 1] = gx / norm, gy / norm
+            acc = forces.moussaid2009(z, v, np.zeros((0, 2), np.int64), True, interaction_range, strength, lam, gamma,
+                                      n, n_prime, walking, e, fov_deg, out_of_view)
+            acc += forces._wall_force(z, r, e, wall_strength, wall_range, wall_reach, fov_deg, out_of_view, walls, origin,
+                                      cell, columns, rows, start, members)
+            if robot_visible:
+                acc += forces.obstacle_disc_force(z, e, rx, ry, robot_radius, robot_strength, robot_range, fov_deg,
+                                                  out_of_view)
+            moved = np.empty((people, 2))
+            for i in range(people):
+                ax = (v0[k, i] * e[i, 0] - v[i, 0]) / tau + acc[i, 0] + noise[t, k, i, 0]
+                ay = (v0[k, i] * e[i, 1] - v[i, 1]) / tau + acc[i, 1] + noise[t, k, i, 1]
+                nx, ny = v[i, 0] + ax * dt, v[i, 1] + ay * dt
+                back = min(nx * e[i, 0] + ny * e[i, 1], 0.0)  # pressure stops a walker; it does not walk them back
+                nx, ny = nx - back * e[i, 0], ny - back * e[i, 1]
+                scale = min(1.0, max_speed_factor * v0[k, i] / max(math.sqrt(nx * nx + ny * ny), 1e-9))
+                moved[i, 0], moved[i, 1] = z[i, 0] + scale * nx * dt, z[i, 1] + scale * ny * dt
+                gap = min(gap, math.sqrt((moved[i, 0] - rx) ** 2 + (moved[i, 1] - ry) ** 2) - r[i] - robot_radius)
+            _contacts(moved, r, width, height)
+            for i in range(people):
+                v[i, 0], v[i, 1] = (moved[i, 0] - z[i, 0]) / dt, (moved[i, 1] - z[i, 1]) / dt
+                z[i, 0], z[i, 1] = moved[i, 0], moved[i, 1]
+                walked[k, i] += math.sqrt(v[i, 0] ** 2 + v[i, 1] ** 2) * dt
+                if math.sqrt((goal[k, i, 0] - z[i, 0]) ** 2 + (goal[k, i, 1] - z[i, 1]) ** 2) < ARRIVED:
+                    place[k, i] = (place[k, i] + 1) % route_length[k, i]
+                    goal[k, i, 0], goal[k, i, 1] = route[k, i, place[k, i], 0], route[k, i, place[k, i], 1]
+            gaps[t, k] = gap
+            if gap < 0 and (t == 0 or gaps[:t, k].min() >= 0):
+                hit_pos[k], hit_vel[k] = z, v
+    return gaps, hit_pos, hit_vel
+
+
+@kernel
+def _contacts(z, radius, width, height):
+    """Overlapping persons apart (half the overlap each), everyone inside the room. Nobody is pushed off the
+    robot: an overlap with it is a collision, left for the episode to see (and, when the robot is visible, for
+    the person's repulsion from it to undo)."""
+    push = np.zeros_like(z)
+    for i in range(len(z)):
+        for j in range(len(z)):
+            if i != j:
+                dx, dy = z[j, 0] - z[i, 0], z[j, 1] - z[i, 1]
+                d = math.sqrt(dx * dx + dy * dy)
+                overlap = radius[i] + radius[j] - d
+                if overlap > 0:
+                    push[i, 0] -= 0.5 * overlap / d * dx
+                    push[i, 1] -= 0.5 * overlap / d * dy
+    for i in range(len(z)):
+        z[i, 0] = min(max(z[i, 0] + push[i, 0], radius[i]), width - radius[i])
+        z[i, 1] = min(max(z[i, 1] + push[i, 1], radius[i]), height - radius[i])
