@@ -16,6 +16,7 @@ a millimetre and a hundredth of a second would swamp.
 
 from __future__ import annotations
 
+import gc
 import json
 import math
 import time
@@ -256,6 +257,7 @@ def _simulate(scenario: Scenario, tmp: Path, rrd: bool, progress: bool) -> dict:
     start = time.perf_counter()
     sim.warm_up()
     warmup_s = time.perf_counter() - start
+    gc.freeze()  # what the imports and the world hold lives as long as the run: out of every collection
     recording = None
     if rrd:
         from .recording import Recording  # rerun, imported only for a recording: 50 MB of memory

@@ -21,3 +21,25 @@ def test_seed000_rule_on_a_person_seen_and_one_behind_them():
     got = seed000_visible(np.array([[5.0, 0.0], [5.38, 0.0], [5.5, 0.0], [3.0, 4.0]]), np.zeros(2), points)
     assert got.tolist() == [True, True, False, False]
     assert seed000_visible(np.array([[5.0, 0.0]]), np.zeros(2), np.full((3, 2), np.nan)).tolist() == [False]
+
+
+def test_seed000_rule_across_the_bearing_seam_and_round_the_laser():
+    # a person straight behind the laser (bearing 180 deg, where the bins wrap) with a point 0.1 m below their
+    # shifted position (-4.8, 0): visible; a person 0.1 m from the laser, shifted 0.2 m past it to (-0.1, 0), whose
+    # 0.3 m disc holds the laser, and a point 0.269 m from there: visible; a person with no point near: occluded
+    points = np.array([[-4.8, -0.1], [0.0, 0.25]])
+    got = seed000_visible(np.array([[-5.0, 0.0], [0.1, 0.0], [-5.0, 3.0]]), np.zeros(2), points)
+    assert got.tolist() == [True, True, False]
+
+
+def test_seed000_rule_is_a_radius_search_about_the_shifted_positions():
+    # random scenes against a brute-force search: every point within 0.3 m of each shifted position
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        origin = rng.uniform(-5, 5, 2)
+        positions = origin + rng.uniform(-8, 8, (40, 2))
+        points = origin + rng.uniform(-8, 8, (300, 2))
+        towards = origin - positions
+        shifted = positions + 0.2 * towards / np.linalg.norm(towards, axis=1)[:, None]
+        near = (np.linalg.norm(shifted[:, None] - points[None], axis=2) < 0.3).any(axis=1)
+        assert seed000_visible(positions, origin, points).tolist() == near.tolist()
