@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
-from scipy.stats import chi2
+from scipy.special import gammaincinv
 
 from pipeline.params import param
 from pipeline.tracking.association import checked_detections, mahalanobis
@@ -164,7 +164,8 @@ class RgbdTracker:
 
     def __post_init__(self) -> None:
         """What the cycle uses, made from the parameters (which the scenario format has checked)."""
-        self.gate = {dof: float(chi2.ppf(self.gate_probability, dof)) for dof in (2, 4)}
+        # the chi-square quantile, as scipy.stats' chi2.ppf works it out (without importing scipy.stats: 0.5 s)
+        self.gate = {dof: float(2 * gammaincinv(dof / 2, self.gate_probability)) for dof in (2, 4)}
         self.reset()
 
     def reset(self) -> None:
