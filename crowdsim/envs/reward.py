@@ -73,9 +73,8 @@ def in_zone(worlds) -> np.ndarray:
     E, N = worlds.x.shape
     if N == 0:
         return np.zeros(E, bool)
-    positions = worlds.position.reshape(-1, 2)
-    velocity = worlds.velocity.reshape(-1, 2)
-    headings = np.arctan2(velocity[:, 1], velocity[:, 0])
-    walking = np.hypot(velocity[:, 0], velocity[:, 1]) >= ZONES.standing_speed
-    inside = ZONES.inside_each(worlds.robot_pose[:, :2], positions, headings, walking)  # [E, E * N]
-    return inside.reshape(E, E, N)[np.arange(E), np.arange(E)].any(axis=1)
+    velocity = worlds.velocity
+    headings = np.arctan2(velocity[..., 1], velocity[..., 0])
+    walking = np.hypot(velocity[..., 0], velocity[..., 1]) >= ZONES.standing_speed
+    inside = ZONES.inside_each(worlds.robot_pose[:, None, :2], worlds.position, headings, walking)  # [E, 1, N]
+    return inside.any(axis=(1, 2))

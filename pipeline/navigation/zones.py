@@ -52,9 +52,11 @@ class SecurityZones:
 
     def inside_each(self, points: np.ndarray, positions: np.ndarray, headings: np.ndarray,
                     walking: np.ndarray) -> np.ndarray:
-        """Whether each point [m, 2] lies in each zone given as arrays (see ``of``): bool [m, k]."""
-        rel = np.asarray(points, float)[:, None, :] - positions[None, :, :]  # [m, k, 2]
-        d2 = np.einsum("mkj,mkj->mk", rel, rel)
+        """Whether each point [..., m, 2] lies in each zone given as arrays (see ``of``; [..., k] and [..., k, 2]):
+        bool [..., m, k]. Leading axes are batches (one robot against its own world's persons, for many worlds)."""
+        rel = np.asarray(points, float)[..., :, None, :] - positions[..., None, :, :]  # [..., m, k, 2]
+        d2 = np.einsum("...j,...j->...", rel, rel)
+        headings, walking = headings[..., None, :], walking[..., None, :]
         along = rel[..., 0] * np.cos(headings) + rel[..., 1] * np.sin(headings)
         in_sector = walking & (d2 <= self.R ** 2) & (along >= np.cos(self.omega / 2) * np.sqrt(d2))
         return (d2 <= self.r ** 2) | in_sector
