@@ -3,8 +3,9 @@ contacts (crowdsim.crowd.contacts), with what they do (sources, routes, queues, 
 crowdsim.crowd.behaviours.
 
 The forces are compiled kernels over persons, over neighbour pairs (every pair in a small crowd, a k-d tree's in a
-large one, so a step costs O(N log N), not O(N^2)) and over the walls of a grid near each person. Social forces steer; pymunk then moves the bodies and resolves their contacts (the
-force model alone does not keep bodies apart), and a last geometric pass keeps every body out of the walls.
+large one, so a step costs O(N log N), not O(N^2)) and over the walls of a grid near each person. Social forces
+steer; pymunk then moves the bodies and resolves their contacts (the force model alone does not keep bodies apart),
+and a last geometric pass keeps every body out of the walls.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from scenarios.geometry import wall_segments
 from scenarios.typed import Scenario
 from scenarios.wall_grid import WallGrid
@@ -157,8 +159,8 @@ class Crowd:
         acc += forces.group_forces(self.pos, self.vel, e, self.radius, walking_groups, p.group_gaze,
                                    p.group_coherence, p.group_repulsion)
         if robot_pos is not None:
-            acc += forces.obstacle_disc_force(self.pos, e, robot_pos[0], robot_pos[1], robot_radius, p.robot_strength,
-                                              p.robot_range, p.fov_deg, p.out_of_view_weight)
+            acc += forces.obstacle_disc_force(self.pos, e, robot_pos[0], robot_pos[1], robot_radius,
+                                              p.robot_strength, p.robot_range, p.fov_deg, p.out_of_view_weight)
         if p.random_force > 0:
             acc += self.rng.normal(0.0, p.random_force, acc.shape)
         return acc
@@ -188,7 +190,8 @@ class Crowd:
                 robot_vel = (robot_pos - self._robot_pos) / dt
             parked = np.array([1e6, 1e6])  # no robot in this simulation: its disc waits far away
             self.pos = self.contacts.step(self.pos, vel, dt, parked if robot_pos is None else robot_pos, robot_vel)
-            push_out_of_walls(self.pos, self.radius, self.wall_grid)  # Chipmunk tolerates a little overlap; walls get none
+            # Chipmunk tolerates a little overlap; walls get none
+            push_out_of_walls(self.pos, self.radius, self.wall_grid)
             # pushes from a dense crowd can carry a body across a thin wall within one step: such a body stays put
             crossed = self.wall_grid.crossed(before, self.pos)
             self.pos[crossed] = before[crossed]

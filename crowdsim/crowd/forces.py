@@ -164,12 +164,13 @@ def wall_force(pos: np.ndarray, radius: np.ndarray, direction: np.ndarray, grid:
     """Wall repulsion A exp(-(d - r) / B) on the gap between body and wall (Helbing, Farkas & Vicsek 2000: A = 2000 N
     on 80 kg, B = 0.08 m) from every wall of ``grid`` nearer than ``reach``, summed, each weighted by the field of
     view; a corner shared by two segments repels once."""
-    return _wall_force(pos, radius, direction, strength, length, reach, fov_deg, out_of_view, *grid.arrays())
+    return grid_wall_force(pos, radius, direction, strength, length, reach, fov_deg, out_of_view, *grid.arrays())
 
 
 @kernel
-def _wall_force(pos, radius, direction, strength, length, reach, fov_deg, out_of_view, walls, origin, cell, columns,
-                rows, start, members):
+def grid_wall_force(pos, radius, direction, strength, length, reach, fov_deg, out_of_view, walls, origin, cell,
+                    columns, rows, start, members):
+    """``wall_force`` on the grid's arrays (``WallGrid.arrays``), for callers that are kernels themselves."""
     f = np.zeros((len(pos), 2))
     cos_half = math.cos(math.radians(fov_deg) / 2)
     seen, near = np.full(len(walls), -1, np.int64), np.empty(len(walls), np.int64)

@@ -145,8 +145,8 @@ def _pairs(z: np.ndarray) -> np.ndarray:
 @kernel
 def _people_ticks(pos, vel, v0, goal, radius, walked, route, route_length, place, robot, robot_radius, robot_visible,
                   noise, dt, width, height, tau, max_speed_factor, interaction_range, strength, lam, gamma, n, n_prime,
-                  fov_deg, out_of_view, wall_strength, wall_range, wall_reach, robot_strength, robot_range, walls, origin,
-                  cell, columns, rows, start, members):
+                  fov_deg, out_of_view, wall_strength, wall_range, wall_reach, robot_strength, robot_range, walls,
+                  origin, cell, columns, rows, start, members):
     """``Worlds.tick``'s persons, world by world and tick by tick, in place: the scenario crowd's forces
     (``forces``: every pair, the room's walls, the robot's disc when visible), the random force ``noise``, the
     crowd's speed limits, then contacts (half an overlap each, everyone inside the room). Returns the gaps
@@ -167,8 +167,8 @@ def _people_ticks(pos, vel, v0, goal, radius, walked, route, route_length, place
                 e[i, 0], e[i, 1] = gx / norm, gy / norm
             acc = forces.moussaid2009(z, v, np.zeros((0, 2), np.int64), True, interaction_range, strength, lam, gamma,
                                       n, n_prime, walking, e, fov_deg, out_of_view)
-            acc += forces._wall_force(z, r, e, wall_strength, wall_range, wall_reach, fov_deg, out_of_view, walls, origin,
-                                      cell, columns, rows, start, members)
+            acc += forces.grid_wall_force(z, r, e, wall_strength, wall_range, wall_reach, fov_deg, out_of_view, walls,
+                                          origin, cell, columns, rows, start, members)
             if robot_visible:
                 acc += forces.obstacle_disc_force(z, e, rx, ry, robot_radius, robot_strength, robot_range, fov_deg,
                                                   out_of_view)
