@@ -7,7 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.frames import compose, inverse
+from pipeline.compiled import kernel
+from pipeline.frames import compose, compose_pose, inverse
 from pipeline.params import REQUIRED, given, param
 
 
@@ -72,31 +73,45 @@ class Robot:
     def step(self, v: float, omega: float, dt: float) -> None:
         """Move by the command, limited in speed and acceleration, with exact arc integration; integrate the
         odometry with its errors."""
-        v, omega = (float(c) for c in limited(np.array([v, omega]), self.velocity, self, dt))
-        self.pose = compose(self.pose, arc(v, omega, dt))
+        velocity, pose = drive(np.array([[v, omega]], float), self.velocity[None], self.pose[None],
+                               np.array([self.max_acceleration, self.max_angular_acceleration]),
+                               np.array([self.max_speed, self.max_angular_speed]), dt, 1)
+        self.velocity, self.pose = velocity[0, 0], pose[0, 0]
+        v, omega = float(self.velocity[0]), float(self.velocity[1])
         distance, turn = self.odometry.measured(v * dt, omega * dt, self.rng)
         self.odom_pose = compose(self.odom_pose, arc(distance / dt, turn / dt, dt))
-        self.velocity = np.array([v, omega])
         self.clock += dt
 
 
-def limited(command: np.ndarray, velocity: np.ndarray, limits, dt: float) -> np.ndarray:
-    """Commands (v, omega) [..., 2] as the drive executes them after ``velocity`` [..., 2]: within the acceleration
-    limits of one step ``dt``, then within the speed limits (``limits``: a Robot, or its scenario section)."""
-    step = np.array([limits.max_acceleration, limits.max_angular_acceleration]) * dt
-    top = np.array([limits.max_speed, limits.max_angular_speed])
-    # np.minimum/maximum: np.clip's wrapper costs more than the work on a handful of robots
-    return np.minimum(np.maximum(np.minimum(np.maximum(command, velocity - step), velocity + step), -top), top)
+@kernel
+def drive(command, velocity, pose, acceleration, top, dt, ticks):
+    """``ticks`` steps ``dt`` of E differential-drive robots at ``pose`` [E, 3] moving at ``velocity`` [E, 2]
+    (v, omega), each holding its ``command`` [E, 2] as the drive executes it: within ``acceleration`` [2] (m/s^2,
+    rad/s^2) of the last velocity, then within the speeds ``top`` [2]. Returns the velocities [ticks, E, 2] and the
+    poses [ticks, E, 3] after each step."""
+    velocities, poses = np.empty((ticks, len(pose), 2)), np.empty((ticks, len(pose), 3))
+    for k in range(len(pose)):
+        v, omega, x, y, yaw = velocity[k, 0], velocity[k, 1], pose[k, 0], pose[k, 1], pose[k, 2]
+        for t in range(ticks):
+            v = _limited(command[k, 0], v, acceleration[0] * dt, top[0])
+            omega = _limited(command[k, 1], omega, acceleration[1] * dt, top[1])
+            x, y, yaw = compose_pose(x, y, yaw, *arc(v, omega, dt))
+            velocities[t, k, 0], velocities[t, k, 1] = v, omega
+            poses[t, k, 0], poses[t, k, 1], poses[t, k, 2] = x, y, yaw
+    return velocities, poses
 
 
-def arc(v, omega, dt: float) -> np.ndarray:
-    """The pose increment [..., 3] of a differential drive moving at (v, omega) (scalars or arrays) for dt."""
-    v, omega = np.asarray(v, float), np.asarray(omega, float)
+@kernel
+def _limited(command, last, step, top):
+    """The command within ``step`` of the ``last`` velocity, then within +-``top``."""
+    return min(max(min(max(command, last - step), last + step), -top), top)
+
+
+@kernel
+def arc(v, omega, dt):
+    """The pose increment (dx, dy, dyaw) of a differential drive moving at (v, omega) for dt."""
     th = omega * dt
-    straight = np.abs(th) < 1e-9
-    r = v / np.where(straight, 1.0, omega)
-    out = np.empty(th.shape + (3,))
-    out[..., 0] = np.where(straight, v * dt, r * np.sin(th))
-    out[..., 1] = np.where(straight, 0.0, r * (1 - np.cos(th)))
-    out[..., 2] = th
-    return out
+    if abs(th) < 1e-9:
+        return v * dt, 0.0, th
+    r = v / omega
+    return r * np.sin(th), r * (1 - np.cos(th)), th

@@ -16,12 +16,20 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["kernel"]
+__all__ = ["elementwise", "kernel"]
 
 
 def kernel(fn):
     """``fn`` compiled (at its first call, or loaded from the cache)."""
     return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+
+def elementwise(fn):
+    """The scalar function ``fn`` of float64 compiled as a numpy ufunc: called on numbers or arrays (broadcast, as
+    numpy's own), and from inside kernels, the one implementation for both."""
+    ufunc = numba.vectorize(["float64(float64)"], cache=True)(fn)
+    ufunc.__doc__ = fn.__doc__
+    return ufunc
 
 
 @kernel

@@ -10,21 +10,41 @@ from __future__ import annotations
 
 import numpy as np
 
+from .compiled import elementwise, kernel
 
+
+@elementwise
 def wrap_angle(a):
     """Angles wrapped to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - np.asarray(a, float), 2 * np.pi)
+    return np.pi - np.mod(np.pi - a, 2 * np.pi)
+
+
+@kernel
+def compose_pose(ax, ay, ath, bx, by, bth):
+    """``compose`` of one pose a = (ax, ay, ath) and one b, for kernels: the pose (x, y, yaw) of a * b."""
+    c, s = np.cos(ath), np.sin(ath)
+    return ax + c * bx - s * by, ay + s * bx + c * by, wrap_angle(ath + bth)
 
 
 def compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The pose of frame b (given in frame a) expressed in a's parent frame: a * b (poses [..., 3])."""
+    """The pose of frame b (given in frame a) expressed in a's parent frame: a * b (poses [..., 3]: one pose and
+    many, as many of each, or any shapes that broadcast)."""
     a, b = np.asarray(a, float), np.asarray(b, float)
-    c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
-    out = np.empty(a.shape if a.ndim >= b.ndim else b.shape)  # one pose and many, or as many of each
-    out[..., 0] = a[..., 0] + c * b[..., 0] - s * b[..., 1]
-    out[..., 1] = a[..., 1] + s * b[..., 0] + c * b[..., 1]
-    out[..., 2] = wrap_angle(a[..., 2] + b[..., 2])
+    if a.size != 3 and b.size != 3 and a.shape != b.shape:
+        shape = np.broadcast_shapes(a.shape, b.shape)
+        a, b = np.broadcast_to(a, shape), np.broadcast_to(b, shape)
+    out = np.empty(a.shape if a.ndim >= b.ndim else b.shape)
+    _compose_rows(a.reshape(-1, 3), b.reshape(-1, 3), out.reshape(-1, 3))
     return out
+
+
+@kernel
+def _compose_rows(a, b, out):
+    """Each row of ``out`` [n, 3] the pose of a row of ``b`` in a row of ``a`` (a one-row ``a`` or ``b`` serves
+    every row)."""
+    for i in range(len(out)):
+        j, k = min(i, len(a) - 1), min(i, len(b) - 1)
+        out[i, 0], out[i, 1], out[i, 2] = compose_pose(a[j, 0], a[j, 1], a[j, 2], b[k, 0], b[k, 1], b[k, 2])
 
 
 def inverse(a: np.ndarray) -> np.ndarray:

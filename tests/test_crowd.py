@@ -280,3 +280,41 @@ def test_wall_following_keeps_the_wall_on_its_side_round_a_corner(make_scenario)
     left = along_nearest_wall(crowd.pos, crowd.walls, np.array([-1.0, -1.0]))
     assert right == pytest.approx(np.array([[1.0, 0.0], [0.0, 1.0]]))
     assert left == pytest.approx(np.array([[-1.0, 0.0], [0.0, -1.0]]))
+
+
+def test_the_step_kernels_by_hand(make_scenario):
+    from crowdsim.crowd import forces
+    from crowdsim.crowd.crowd import _desired, _moved, _velocity
+    from scenarios.wall_grid import WallGrid
+
+    # the goal 5 m away at (3, 4): e = (0.6, 0.8) at the desired speed; a standing person 0.15 m from their spot
+    # (half the arrival radius) wants half their speed; one waiting at a waypoint wants none
+    pos, goal = np.zeros((3, 2)), np.array([[3.0, 4.0], [0.15, 0.0], [0.0, 2.0]])
+    e, speed = _desired(goal, pos, np.array([1.2, 1.0, 1.0]), np.array([False, True, True]),
+                        np.array([False, False, True]), 0.3)
+    assert e == pytest.approx(np.array([[0.6, 0.8], [1.0, 0.0], [0.0, 1.0]]))
+    assert speed == pytest.approx([1.2, 0.5, 0.0])
+
+    # three persons 10 m apart (out of each other's reach), no walls, no robot, no random force: each feels only the
+    # relaxation (v0 e - v) / tau, tau = 0.5 s, for dt = 0.1 s. From rest at 1.2 m/s: v = 0.24 m/s. Walking at 2 m/s
+    # wanting 1 m/s: 2 - 0.2 = 1.8, capped at 1.3 x 1 m/s. Walking backwards at 1 m/s wanting to stand: -0.8 m/s,
+    # which a walker does not keep (it stops) and a person holding a spot does (pushed back to it, under the cap)
+    crowd = Crowd(make_scenario(crowd={"random_force": 0.0}), np.random.default_rng(0))
+    pos = np.array([[0.0, 0.0], [10.0, 0.0], [20.0, 0.0]])
+    vel = np.array([[0.0, 0.0], [2.0, 0.0], [-1.0, 0.0]])
+    east = np.array([[1.0, 0.0]] * 3)
+    args = (np.full(3, 0.25), np.full(3, -1), np.ones(3, bool), forces.NO_FORCE, forces.NO_PAIRS, True, True,
+            np.nan, np.nan, 0.0, 0.1, *crowd._parameters, *WallGrid.of(np.zeros((0, 2, 2))).arrays())
+    walking = _velocity(pos, vel, np.array([1.2, 1.0, 1.0]), east, np.array([1.2, 1.0, 0.0]), np.zeros(3, bool),
+                        *args)
+    assert walking == pytest.approx(np.array([[0.24, 0.0], [1.3, 0.0], [0.0, 0.0]]))
+    holding = _velocity(pos[2:], vel[2:], np.ones(1), east[:1], np.zeros(1), np.ones(1, bool),
+                        *(a[2:] if isinstance(a, np.ndarray) and a.shape == (3,) else a for a in args))
+    assert holding == pytest.approx(np.array([[-0.8, 0.0]]))
+
+    # a move of (0.3, 0.4) in 0.1 s is 5 m/s and 0.5 m walked; one that crossed a wall is undone: 0 m/s
+    before, after = np.zeros((2, 2)), np.array([[0.3, 0.4], [1.0, 0.0]])
+    walked = np.array([2.0, 2.0])
+    assert _moved(after, before, np.array([False, True]), walked, 0.1) == pytest.approx(np.array([[3.0, 4.0],
+                                                                                                   [0.0, 0.0]]))
+    assert walked == pytest.approx([2.5, 2.0]) and np.array_equal(after[1], [0.0, 0.0])

@@ -64,3 +64,19 @@ def test_optical_axes_of_a_camera():
     rot = optical_rotation(0.7, 0.3)
     assert np.allclose(rot.T @ rot, np.eye(3)) and np.isclose(np.linalg.det(rot), 1.0)
     assert np.isclose(rot[2, 2], -np.sin(0.3))  # forward dips by the pitch
+
+
+def test_compose_by_hand_and_its_shapes():
+    # a robot at (1, 2) facing +y drives 0.5 m ahead and 0.2 m to its left, turning 3 rad: it ends at
+    # (1 - 0.2, 2 + 0.5), facing pi/2 + 3 wrapped into (-pi, pi]
+    a, b = [1.0, 2.0, np.pi / 2], [0.5, 0.2, 3.0]
+    assert compose(a, b) == pytest.approx([0.8, 2.5, np.pi / 2 + 3.0 - 2 * np.pi], abs=1e-12)
+    many = np.array([b, [0.0, 0.0, 0.0], [1.0, 0.0, -np.pi / 2]])
+    one_many = compose(a, many)  # one pose and many
+    assert one_many.shape == (3, 3) and one_many[1] == pytest.approx(a) and one_many[2] == pytest.approx([1, 3, 0])
+    assert compose(many, [0.0, 0.0, 0.0]) == pytest.approx(many)  # many and one: the identity changes nothing
+    assert np.array_equal(compose(many, many)[2], compose(many[2], many[2]))  # as many of each, row by row
+    grid = compose(many[:, None], many[None])  # shapes that broadcast: every pose in every pose
+    assert grid.shape == (3, 3, 3) and np.array_equal(grid[2, 0], compose(many[2], many[0]))
+    assert compose(a, np.zeros((0, 3))).shape == (0, 3) and compose(np.zeros((0, 3)), a).shape == (0, 3)
+    assert np.allclose(wrap_angle(np.array([[4.0, -4.0]])), [[4.0 - 2 * np.pi, 2 * np.pi - 4.0]], atol=1e-15)

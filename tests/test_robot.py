@@ -109,3 +109,18 @@ def test_a_robot_made_in_python_has_the_scenario_formats_defaults():
     assert made.pose == pytest.approx(loaded.pose) and made.pose[:2] == pytest.approx(
         [1.0 + np.cos(0.5) * driven, 2.0 + np.sin(0.5) * driven], abs=1e-9)
     assert made.odom_pose[2] == pytest.approx(loaded.odom_pose[2]) == pytest.approx(0.01 * made.odom_pose[0], rel=0.05)
+
+
+def test_drive_steps_many_robots_through_many_ticks():
+    from crowdsim.robot import drive
+
+    # robot 0 from rest, v = 1 m/s and omega = 0 commanded at 0.5 m/s^2 (dt 0.1 s: +0.05 m/s a tick), capped at
+    # 0.12 m/s: 0.05, 0.10, 0.12 m/s, so x = 0.1 * (0.05 + 0.10 + 0.12) = 0.027 m after three ticks; robot 1 turns on
+    # the spot at its cap of 1 rad/s from 1 rad/s already, facing pi - 0.1 + 0.3, wrapped
+    velocities, poses = drive(np.array([[1.0, 0.0], [0.0, 5.0]]), np.array([[0.0, 0.0], [0.0, 1.0]]),
+                              np.array([[0.0, 0.0, 0.0], [2.0, 3.0, np.pi - 0.1]]), np.array([0.5, 1.5]),
+                              np.array([0.12, 1.0]), 0.1, 3)
+    assert velocities[:, 0, 0] == pytest.approx([0.05, 0.10, 0.12])
+    assert poses[-1, 0] == pytest.approx([0.027, 0.0, 0.0], abs=1e-15)
+    assert np.array_equal(velocities[:, 1], [[0.0, 1.0]] * 3)
+    assert poses[-1, 1] == pytest.approx([2.0, 3.0, np.pi + 0.2 - 2 * np.pi], abs=1e-12)

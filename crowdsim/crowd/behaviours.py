@@ -115,6 +115,7 @@ class Routes:
                     self.wait[k, i] = wps[stage].wait
             self.length[k] = len(route.waypoints)
             self.sink[k] = route.sink
+        self.queued_stages = bool((self.queue >= 0).any())  # whether any route has a queue for a stage
 
     def start(self, route: int, n: int) -> dict:
         """The route-related arrays of ``n`` persons starting on ``route``, for ``Crowd.add``."""
@@ -123,6 +124,8 @@ class Routes:
 
     def stage_queue(self, crowd: Crowd) -> np.ndarray:
         """The queue each person's current stage is; -1 for a waypoint, and for standing people."""
+        if not self.queued_stages:
+            return np.full(len(crowd.route), -1)
         r = np.maximum(crowd.route, 0)
         return np.where(crowd.route >= 0, self.queue[r, np.minimum(crowd.stage, self.length[r] - 1)], -1)
 
@@ -176,6 +179,8 @@ class Queues:
     def update(self, crowd: Crowd) -> np.ndarray:
         """Serve, line up and move up the people whose stage is a queue; return who finished being served."""
         served = np.zeros(len(crowd.id), bool)
+        if not self.members:
+            return served
         stage_queue = crowd.routes.stage_queue(crowd)
         for q, members in enumerate(self.members):
             head = self.head[q]
@@ -274,13 +279,14 @@ class Escapes:
         """Who feels the walls' social repulsion: everyone but those squeezing past."""
         return crowd.t >= crowd.squeeze_until
 
-    def update(self, crowd: Crowd, dt: float) -> None:
-        """Count the time each walker has been held; start, turn and end escapes."""
-        slow = ~crowd.holding & (np.linalg.norm(crowd.vel, axis=1) < 0.2 * crowd.v0)
+    def update(self, crowd: Crowd, dt: float, holding: np.ndarray) -> None:
+        """Count the time each walker has been held; start, turn and end escapes (``holding``: ``crowd.holding``)."""
+        slow = ~holding & (np.linalg.norm(crowd.vel, axis=1) < 0.2 * crowd.v0)
         crowd.slow_time = np.where(slow, crowd.slow_time + dt, 0.0)
         escaping = np.flatnonzero(crowd.escape)
-        clear = ~crowd.wall_grid.crossed(crowd.pos[escaping], crowd.goal[escaping]) | crowd.holding[escaping]
-        crowd.escape[escaping[clear]] = 0.0
+        if len(escaping):
+            clear = ~crowd.wall_grid.crossed(crowd.pos[escaping], crowd.goal[escaping]) | holding[escaping]
+            crowd.escape[escaping[clear]] = 0.0
         stuck = np.flatnonzero(crowd.slow_time >= self.stuck_time)
         if len(stuck) == 0 or len(crowd.walls) == 0:
             return

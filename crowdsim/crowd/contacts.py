@@ -53,6 +53,7 @@ class ContactSolver:
             self.space.add(self.robot, disc)
         self.bodies: list[pymunk.Body] = []  # in the crowd's agent order
         self._perm = np.zeros(0, np.int64)  # space order -> agent index (-1: the robot or the static body)
+        self._mine, self._rows = np.zeros(0, bool), np.zeros(0, np.int64)
         self._out = batch.Buffer()
         self._in = batch.Buffer()
 
@@ -87,6 +88,8 @@ class ContactSolver:
         where = np.searchsorted(ours[order], space_ids).clip(0, max(len(ours) - 1, 0))
         found = (ours[order][where] == space_ids) if len(ours) else np.zeros(len(space_ids), bool)
         self._perm = np.where(found, order[where] if len(ours) else -1, -1)
+        self._mine = self._perm >= 0  # the space's rows that are persons
+        self._rows = self._perm[self._mine]  # the persons of those rows, in space order
 
     def step(self, pos: np.ndarray, vel: np.ndarray, dt: float, robot_pose: np.ndarray | None = None,
              robot_velocity: np.ndarray | None = None) -> np.ndarray:
@@ -98,9 +101,9 @@ class ContactSolver:
         self._out.clear()
         batch.get_space_bodies(self.space, FIELDS, self._out)
         state = np.frombuffer(self._out.float_buf(), dtype=np.float64).reshape(-1, 4).copy()
-        mine = self._perm >= 0
-        state[mine, :2] = pos[self._perm[mine]]
-        state[mine, 2:] = vel[self._perm[mine]]
+        mine, rows = self._mine, self._rows
+        state[mine, :2] = pos[rows]
+        state[mine, 2:] = vel[rows]
         self._in.set_float_buf(state.ravel())
         batch.set_space_bodies(self.space, FIELDS, self._in)
         for _ in range(SUBSTEPS):
@@ -109,7 +112,7 @@ class ContactSolver:
         batch.get_space_bodies(self.space, batch.BodyFields.POSITION, self._out)
         moved = np.frombuffer(self._out.float_buf(), dtype=np.float64).reshape(-1, 2)
         out = np.empty_like(pos)
-        out[self._perm[mine]] = moved[mine]
+        out[rows] = moved[mine]
         return out
 
 

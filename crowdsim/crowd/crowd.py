@@ -10,10 +10,12 @@ and a last geometric pass keeps every body out of the walls.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.compiled import kernel
 from scenarios.geometry import wall_segments
 from scenarios.typed import Scenario
 from scenarios.wall_grid import WallGrid
@@ -77,6 +79,12 @@ class Crowd:
         self.queues = Queues(scenario)
         self.attractions = Attractions(scenario)
         self.escapes = Escapes(self.p.stuck_time)
+        p = self.p
+        self._parameters = (p.relaxation_time, p.max_speed_factor, p.interaction_range, p.moussaid_strength,
+                            p.moussaid_lambda, p.moussaid_gamma, p.moussaid_n, p.moussaid_n_prime, p.agent_strength,
+                            p.agent_range, p.step_time, p.fov_deg, p.out_of_view_weight, p.wall_strength, p.wall_range,
+                            p.wall_interaction_range, p.group_gaze, p.group_coherence, p.group_repulsion,
+                            p.robot_strength, p.robot_range)  # _velocity's, in its order
         self.sources = Sources(scenario.sources, self.types, self.routes, rng)
         self.columns = dict(COLUMNS)
         for behaviour in (self.routes, self.queues, self.attractions, self.escapes):
@@ -131,40 +139,6 @@ class Crowd:
         waiting at a waypoint."""
         return (self.route < 0) | (self.queued >= 0) | (self.visiting >= 0) | self.waiting
 
-    # -- forces -------------------------------------------------------------------------------------------------
-
-    def desired_direction(self, holding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Unit vectors towards the current goals (or along the wall for walkers escaping one, see
-        ``behaviours.Escapes``) and the desired speeds (standing people slow to their spot; people waiting at a
-        waypoint want to stand wherever they stopped, so a group gathering there stands round it, not on its
-        centre). ``holding``: ``self.holding``, made once a step."""
-        to_goal = self.goal - self.pos
-        dist = np.linalg.norm(to_goal, axis=1)
-        e = to_goal / np.maximum(dist, 1e-9)[:, None]
-        speed = np.where(holding, self.v0 * np.clip(dist / ARRIVAL_RADIUS, 0.0, 1.0), self.v0)
-        speed[self.waiting] = 0.0
-        self.escapes.steer(self, e)
-        return e, speed
-
-    def acceleration(self, e: np.ndarray, speed: np.ndarray, holding: np.ndarray, robot_pos: np.ndarray | None,
-                     robot_radius: float) -> np.ndarray:
-        """The sum of every force term on every agent, walking in directions ``e`` at desired ``speed``."""
-        p = self.p
-        acc = forces.desired_force(e, speed, self.vel, p.relaxation_time)
-        acc += forces.pair_forces(p, self.pos, self.vel, e, ~holding)
-        acc += forces.wall_force(self.pos, self.radius, e, self.wall_grid, p.wall_strength, p.wall_range,
-                                 p.wall_interaction_range, p.fov_deg, p.out_of_view_weight
-                                 ) * self.escapes.repelled_by_walls(self)[:, None]
-        walking_groups = np.where(holding, -1, self.group)
-        acc += forces.group_forces(self.pos, self.vel, e, self.radius, walking_groups, p.group_gaze,
-                                   p.group_coherence, p.group_repulsion)
-        if robot_pos is not None:
-            acc += forces.obstacle_disc_force(self.pos, e, robot_pos[0], robot_pos[1], robot_radius,
-                                              p.robot_strength, p.robot_range, p.fov_deg, p.out_of_view_weight)
-        if p.random_force > 0:
-            acc += self.rng.normal(0.0, p.random_force, acc.shape)
-        return acc
-
     # -- stepping -----------------------------------------------------------------------------------------------
 
     def step(self, dt: float, robot_pos: np.ndarray | None = None, robot_radius: float = 0.0) -> None:
@@ -172,18 +146,18 @@ class Crowd:
         act on where they now are."""
         self.sources.update(self)
         if len(self.pos):
+            p = self.p
             holding = self.holding  # nobody starts or stops holding a spot before the behaviours act
-            e, speed = self.desired_direction(holding)
-            vel = self.vel + self.acceleration(e, speed, holding, robot_pos, robot_radius) * dt
-            # The field-of-view weighting makes the forces from those ahead outweigh those from behind, so in a
-            # jam the net force points backwards and a whole crowd would walk backwards. Pressure from ahead
-            # stops a walker; it does not make them walk backwards (contacts still push bodies physically).
-            along = np.einsum("ij,ij->i", vel, e)
-            back = ~holding & (along < 0)
-            vel[back] -= along[back, None] * e[back]
-            vmax = self.p.max_speed_factor * self.v0
-            s = np.linalg.norm(vel, axis=1)
-            vel *= np.minimum(1.0, vmax / np.maximum(s, 1e-9))[:, None]
+            e, speed = _desired(self.goal, self.pos, self.v0, holding, self.waiting, ARRIVAL_RADIUS)
+            self.escapes.steer(self, e)
+            moussaid = p.interaction == "moussaid2009"
+            every = moussaid and len(self.pos) <= forces.EVERY_PAIR
+            pairs = forces.NO_PAIRS if every else forces.neighbour_pairs(self.pos, p.interaction_range)
+            noise = self.rng.normal(0.0, p.random_force, self.pos.shape) if p.random_force > 0 else forces.NO_FORCE
+            robot = (np.nan, np.nan) if robot_pos is None else (float(robot_pos[0]), float(robot_pos[1]))
+            vel = _velocity(self.pos, self.vel, self.v0, e, speed, holding, self.radius, self.group,
+                            self.escapes.repelled_by_walls(self), noise, pairs, every, moussaid, *robot, robot_radius,
+                            dt, *self._parameters, *self.wall_grid.arrays())
             before = self.pos.copy()
             robot_vel = None
             if robot_pos is not None and self._robot_pos is not None:
@@ -193,11 +167,8 @@ class Crowd:
             # Chipmunk tolerates a little overlap; walls get none
             push_out_of_walls(self.pos, self.radius, self.wall_grid)
             # pushes from a dense crowd can carry a body across a thin wall within one step: such a body stays put
-            crossed = self.wall_grid.crossed(before, self.pos)
-            self.pos[crossed] = before[crossed]
-            self.vel = (self.pos - before) / dt
-            self.walked += np.linalg.norm(self.vel, axis=1) * dt
-            self.escapes.update(self, dt)
+            self.vel = _moved(self.pos, before, self.wall_grid.crossed(before, self.pos), self.walked, dt)
+            self.escapes.update(self, dt, holding)
         self._robot_pos = None if robot_pos is None else np.array(robot_pos, float)
         self.t += dt
         self.attractions.update(self, dt)
@@ -206,3 +177,81 @@ class Crowd:
     def states(self) -> AgentStates:
         return AgentStates(self.t, self.id.copy(), self.pos.copy(), self.vel.copy(), self.goal.copy(),
                            self.group.copy(), self.walked.copy(), self.radius.copy(), self.kind.copy())
+
+
+@kernel
+def _desired(goal, pos, v0, holding, waiting, arrival_radius):
+    """Unit vectors towards the goals [n, 2] and the desired speeds [n]: standing people slow to their spot within
+    ``arrival_radius``; people ``waiting`` at a waypoint want to stand wherever they stopped (a group gathering
+    there stands round it, not on its centre)."""
+    e, speed = np.empty((len(pos), 2)), np.empty(len(pos))
+    for i in range(len(pos)):
+        gx, gy = goal[i, 0] - pos[i, 0], goal[i, 1] - pos[i, 1]
+        dist = math.sqrt(gx * gx + gy * gy)
+        e[i, 0], e[i, 1] = gx / max(dist, 1e-9), gy / max(dist, 1e-9)
+        speed[i] = 0.0 if waiting[i] else v0[i] * min(max(dist / arrival_radius, 0.0), 1.0) if holding[i] else v0[i]
+    return e, speed
+
+
+@kernel
+def _velocity(pos, vel, v0, e, speed, holding, radius, group, repelled, noise, pairs, every, moussaid, robot_x, robot_y,
+              robot_radius, dt, tau, max_speed_factor, interaction_range, strength, lam, gamma, n, n_prime,
+              agent_strength, agent_range, step_time, fov_deg, out_of_view, wall_strength, wall_range, wall_reach,
+              gaze, coherence, repulsion, robot_strength, robot_range, walls, origin, cell, columns, rows, start,
+              members):
+    """Everyone's velocity after ``dt`` of every force term, walking in directions ``e`` at desired ``speed``: the
+    relaxation towards the desired velocity (Helbing & Molnar 1995), the agent-agent force the crowd parameters
+    choose (Moussaid 2009 over every pair or the k-d tree's ``pairs``; else Helbing & Molnar's ellipses), the walls'
+    (but for those not ``repelled``), the groups' (Moussaid 2010, walking members only), the robot's disc (unless
+    ``robot_x`` is NaN) and the random force ``noise``. Pressure from ahead stops a walker but does not make them
+    walk backwards (in a jam the field of view makes the net force point backwards, and a whole crowd would walk
+    backwards; contacts still push bodies physically); nobody exceeds ``max_speed_factor`` x their desired speed."""
+    walking = ~holding
+    acc = np.empty((len(pos), 2))
+    for i in range(len(pos)):  # forces.desired_force
+        acc[i, 0] = (speed[i] * e[i, 0] - vel[i, 0]) / tau
+        acc[i, 1] = (speed[i] * e[i, 1] - vel[i, 1]) / tau
+    if moussaid:
+        acc += forces.moussaid2009(pos, vel, pairs, every, interaction_range, strength, lam, gamma, n, n_prime,
+                                   walking, e, fov_deg, out_of_view)
+    else:
+        acc += forces.helbing_molnar1995(pos, vel, e, pairs, agent_strength, agent_range, step_time, fov_deg,
+                                         out_of_view)
+    wall = forces.grid_wall_force(pos, radius, e, wall_strength, wall_range, wall_reach, fov_deg, out_of_view, walls,
+                                  origin, cell, columns, rows, start, members)
+    for i in range(len(pos)):
+        acc[i, 0] += wall[i, 0] * repelled[i]
+        acc[i, 1] += wall[i, 1] * repelled[i]
+    grouped = np.flatnonzero(walking & (group >= 0))
+    if len(grouped) >= 2:
+        ids = np.unique(group[grouped])
+        acc += forces.group_members_forces(pos, vel, e, radius, grouped, np.searchsorted(ids, group[grouped]),
+                                           len(ids), gaze, coherence, repulsion,
+                                           math.radians(forces.GROUP_VISION_DEG), forces.GROUP_MARGIN)
+    if not math.isnan(robot_x):
+        acc += forces.obstacle_disc_force(pos, e, robot_x, robot_y, robot_radius, robot_strength, robot_range,
+                                          fov_deg, out_of_view)
+    if len(noise):
+        acc += noise
+    out = np.empty((len(pos), 2))
+    for i in range(len(pos)):
+        vx, vy = vel[i, 0] + acc[i, 0] * dt, vel[i, 1] + acc[i, 1] * dt
+        along = vx * e[i, 0] + vy * e[i, 1]
+        if walking[i] and along < 0:
+            vx, vy = vx - along * e[i, 0], vy - along * e[i, 1]
+        cap = min(1.0, max_speed_factor * v0[i] / max(math.sqrt(vx * vx + vy * vy), 1e-9))
+        out[i, 0], out[i, 1] = vx * cap, vy * cap
+    return out
+
+
+@kernel
+def _moved(pos, before, crossed, walked, dt):
+    """Put back those who ``crossed`` a wall (``pos`` in place), add the distance walked to ``walked``; returns the
+    velocities [n, 2] of the moves from ``before``."""
+    vel = np.empty((len(pos), 2))
+    for i in range(len(pos)):
+        if crossed[i]:
+            pos[i, 0], pos[i, 1] = before[i, 0], before[i, 1]
+        vel[i, 0], vel[i, 1] = (pos[i, 0] - before[i, 0]) / dt, (pos[i, 1] - before[i, 1]) / dt
+        walked[i] += math.sqrt(vel[i, 0] * vel[i, 0] + vel[i, 1] * vel[i, 1]) * dt
+    return vel

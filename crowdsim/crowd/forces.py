@@ -13,16 +13,14 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from pipeline.compiled import kernel
-from scenarios.typed import Section
 from scenarios.wall_grid import WallGrid, away_from_wall, near_walls
 
 NEGLIGIBLE = 0.005  # m/s^2: an interaction weaker than this (0.1% of Moussaid's A) is not computed
 EVERY_PAIR = 200  # persons up to which every pair is tested directly: below, a k-d tree costs more than it saves
-
-
-def desired_force(direction: np.ndarray, speed: np.ndarray, vel: np.ndarray, tau: float) -> np.ndarray:
-    """Relaxation towards the desired velocity: (v0 e - v) / tau (Helbing & Molnar 1995)."""
-    return (speed[:, None] * direction - vel) / tau
+NO_PAIRS = np.zeros((0, 2), np.int64)  # the pairs argument where every pair is tested
+NO_FORCE = np.zeros((0, 2))  # no random force
+GROUP_VISION_DEG = 90.0  # half-angle of a group member's vision (Moussaid et al. 2010)
+GROUP_MARGIN = 0.3  # m beyond the two radii within which group members repel (Moussaid et al. 2010)
 
 
 @kernel
@@ -145,20 +143,6 @@ def neighbour_pairs(pos: np.ndarray, reach: float) -> np.ndarray:
     return cKDTree(pos, balanced_tree=False, compact_nodes=False).query_pairs(reach, output_type="ndarray")
 
 
-def pair_forces(p: Section, pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, walking: np.ndarray) -> np.ndarray:
-    """The agent-agent force the crowd parameters ``p`` choose (``interaction``) between persons within
-    ``interaction_range``, summed per person: every pair tested directly in a small crowd, the pairs from a k-d tree
-    in a large one (the same pairs)."""
-    if p.interaction == "moussaid2009":
-        every = len(pos) <= EVERY_PAIR
-        pairs = np.zeros((0, 2), np.int64) if every else neighbour_pairs(pos, p.interaction_range)
-        return moussaid2009(pos, vel, pairs, every, p.interaction_range, p.moussaid_strength, p.moussaid_lambda,
-                            p.moussaid_gamma, p.moussaid_n, p.moussaid_n_prime, walking, direction, p.fov_deg,
-                            p.out_of_view_weight)
-    return helbing_molnar1995(pos, vel, direction, neighbour_pairs(pos, p.interaction_range), p.agent_strength,
-                              p.agent_range, p.step_time, p.fov_deg, p.out_of_view_weight)
-
-
 def wall_force(pos: np.ndarray, radius: np.ndarray, direction: np.ndarray, grid: WallGrid, strength: float,
                length: float, reach: float, fov_deg: float, out_of_view: float) -> np.ndarray:
     """Wall repulsion A exp(-(d - r) / B) on the gap between body and wall (Helbing, Farkas & Vicsek 2000: A = 2000 N
@@ -214,8 +198,8 @@ def obstacle_disc_force(pos, direction, cx, cy, radius, strength, length, fov_de
 
 
 def group_forces(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, radius: np.ndarray, group: np.ndarray,
-                 gaze: float, coherence: float, repulsion: float, vision_deg: float = 90.0,
-                 margin: float = 0.3) -> np.ndarray:
+                 gaze: float, coherence: float, repulsion: float, vision_deg: float = GROUP_VISION_DEG,
+                 margin: float = GROUP_MARGIN) -> np.ndarray:
     """Moussaid et al. 2010 (PLoS ONE 5(4) e10047) group terms for members of ``group`` >= 0.
 
     gaze: -beta1 alpha v, alpha the head rotation needed to keep the other members' centre in view (vision
@@ -226,12 +210,13 @@ def group_forces(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, radius
     if len(members) < 2:  # no group of two: no force, and none of the work
         return np.zeros_like(pos)
     labels, label = np.unique(group[members], return_inverse=True)
-    return _group_forces(pos, vel, direction, radius, members, label, len(labels), gaze, coherence, repulsion,
-                         math.radians(vision_deg), margin)
+    return group_members_forces(pos, vel, direction, radius, members, label, len(labels), gaze, coherence,
+                                repulsion, math.radians(vision_deg), margin)
 
 
 @kernel
-def _group_forces(pos, vel, direction, radius, members, label, groups, gaze, coherence, repulsion, vision, margin):
+def group_members_forces(pos, vel, direction, radius, members, label, groups, gaze, coherence, repulsion, vision,
+                         margin):
     """``group_forces`` for ``members`` (indices into the persons) of groups ``label`` (0 .. groups - 1)."""
     f = np.zeros((len(pos), 2))
     size = np.zeros(groups, np.int64)

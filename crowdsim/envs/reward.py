@@ -64,7 +64,7 @@ class Reward:
             terms["band"], terms["band_distance"] = (outside == 0) * period, outside * period
         else:
             terms["band"] = terms["band_distance"] = zero
-        total = sum(self.weights[name] * value for name, value in terms.items())
+        total = sum((self.weights[name] * value for name, value in terms.items() if self.weights[name]), zero)
         return total, terms
 
 

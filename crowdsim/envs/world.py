@@ -23,8 +23,7 @@ from crowdsim.crowd import forces
 from pipeline.compiled import kernel
 from scenarios.wall_grid import WallGrid
 from crowdsim.crowd.behaviours import AgentTypes
-from crowdsim.robot import arc, limited
-from pipeline.frames import compose
+from crowdsim.robot import drive
 from scenarios.typed import Scenario
 
 from ..errors import Error
@@ -45,9 +44,15 @@ class Worlds:
             raise Error(f"people: expected a count >= 0, got {people}")
         self.E, self.N = n_worlds, people
         self.layout = LAYOUTS[layout]
-        self.crowd_p = scenario.crowd
+        self.crowd_p = p = scenario.crowd
+        self._forces = (p.relaxation_time, p.max_speed_factor, p.interaction_range, p.moussaid_strength,
+                        p.moussaid_lambda, p.moussaid_gamma, p.moussaid_n, p.moussaid_n_prime, p.fov_deg,
+                        p.out_of_view_weight, p.wall_strength, p.wall_range, p.wall_interaction_range,
+                        p.robot_strength, p.robot_range)  # _people_ticks's parameters, in its order
         self.robot_p = scenario.robot
         self.robot_radius = self.robot_p.radius
+        self._acceleration = np.array([self.robot_p.max_acceleration, self.robot_p.max_angular_acceleration])
+        self._top = np.array([self.robot_p.max_speed, self.robot_p.max_angular_speed])
         self.robot_visible = robot_visible
         self.dt = scenario.dt
         self.types = AgentTypes(self.crowd_p.agent_types)
@@ -113,23 +118,19 @@ class Worlds:
         smallest gap between each world's robot disc and a person or a wall, before contacts push anyone apart
         [ticks, E] (negative: a collision), and, for each world that collided in these ticks, its state (time,
         robot pose, person positions and velocities) at the first of them."""
-        p, dt, ticks = self.crowd_p, self.dt, len(noise)
-        poses, stamps, velocity = np.empty((ticks, self.E, 3)), np.empty((ticks, self.E)), np.empty((ticks, self.E, 2))
-        for t in range(ticks):  # the robots first: nothing a person does moves them
-            self.robot_velocity = velocity[t] = limited(command, self.robot_velocity, self.robot_p, dt)
-        moves = arc(velocity[..., 0], velocity[..., 1], dt)
+        dt, ticks = self.dt, len(noise)
+        # the robots first: nothing a person does moves them
+        velocity, poses = drive(command, self.robot_velocity, self.robot_pose, self._acceleration, self._top, dt, ticks)
+        self.robot_velocity, self.robot_pose = velocity[-1], poses[-1]
+        stamps = np.empty((ticks, self.E))
         for t in range(ticks):
-            self.robot_pose = compose(self.robot_pose, moves[t])
             self.t += dt
-            poses[t], stamps[t] = self.robot_pose, self.t
+            stamps[t] = self.t
         people = np.ascontiguousarray(noise).view(float).reshape(noise.shape + (2,))
         gaps, hit_pos, hit_vel = _people_ticks(
             _pairs(self.z), _pairs(self.v), self.v0, _pairs(self.goal_z), self.radius, self.walked,
             _pairs(self.route), self.route_length, self.place, poses, self.robot_radius, self.robot_visible, people,
-            dt, self.size[0], self.size[1], p.relaxation_time, p.max_speed_factor, p.interaction_range,
-            p.moussaid_strength, p.moussaid_lambda, p.moussaid_gamma, p.moussaid_n, p.moussaid_n_prime, p.fov_deg,
-            p.out_of_view_weight, p.wall_strength, p.wall_range, p.wall_interaction_range, p.robot_strength,
-            p.robot_range, *self._room.arrays())
+            dt, self.size[0], self.size[1], *self._forces, *self._room.arrays())
         hit = {}
         for k in np.flatnonzero((gaps < 0).any(axis=0)):
             t = int(np.argmax(gaps[:, k] < 0))
