@@ -318,3 +318,21 @@ def test_the_step_kernels_by_hand(make_scenario):
     assert _moved(after, before, np.array([False, True]), walked, 0.1) == pytest.approx(np.array([[3.0, 4.0],
                                                                                                    [0.0, 0.0]]))
     assert walked == pytest.approx([2.5, 2.0]) and np.array_equal(after[1], [0.0, 0.0])
+
+
+def test_held_time_counts_walkers_under_a_fifth_of_their_speed():
+    from crowdsim.crowd.behaviours import _held_for
+
+    # desired 1 m/s: 0.1 m/s is held (+dt), 0.3 m/s walks (back to 0), and a person holding a spot is never held
+    held = _held_for(np.array([1.0, 1.0, 1.0]), np.array([[0.06, 0.08], [0.3, 0.0], [0.0, 0.0]]), np.ones(3),
+                     np.array([False, False, True]), 0.04)
+    assert held == pytest.approx([1.04, 0.0, 0.0])
+
+
+def test_arrival_within_the_goal_radius():
+    from crowdsim.crowd.behaviours import _arrived
+
+    # 5 m from the goal arrives within 5.1 m, not within 5 m (strictly inside), nor when not a candidate
+    goal, pos = np.zeros((3, 2)), np.array([[3.0, 4.0]] * 3)
+    assert _arrived(goal, pos, np.array([5.1, 5.0, 5.1]), np.array([True, True, False])).tolist() == [True, False,
+                                                                                                      False]

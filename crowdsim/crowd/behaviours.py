@@ -9,11 +9,13 @@ those arrays beside its own, in agent order, so that persons arriving or leaving
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from pipeline.compiled import kernel
 from scenarios.geometry import closest_on_segments, segments_cross
 from scenarios.typed import Names, Scenario, Section
 
@@ -23,6 +25,7 @@ if TYPE_CHECKING:
 ATTRACTION_RATE = 0.05  # 1/s per unit of PedSim's (unitless) attraction strength, while a walker is within reach
 STANDING_RADIUS = 0.1  # m, the goal radius of a standing person's spot
 RETRY_EMISSION = 0.2  # s: a source whose area is occupied tries again this much later
+SLOW_SHARE = 0.2  # a walker slower than this share of its desired speed is held (``Escapes``)
 
 
 @dataclass(frozen=True)
@@ -141,7 +144,7 @@ class Routes:
         r = np.maximum(crowd.route, 0)
         waited = crowd.wait_end <= crowd.t  # NaN, not waiting, compares False
         walking_to_waypoint = ~crowd.holding & (self.stage_queue(crowd) < 0)
-        reached = walking_to_waypoint & (np.linalg.norm(crowd.goal - crowd.pos, axis=1) < crowd.goal_radius)
+        reached = _arrived(crowd.goal, crowd.pos, crowd.goal_radius, walking_to_waypoint)
         wait = self.wait[r, crowd.stage]
         stay = reached & (wait > 0)
         crowd.wait_end[stay] = crowd.t + wait[stay]
@@ -254,7 +257,7 @@ class Attractions:
 class Escapes:
     """The escape from walls and corners that PedSim lacks.
 
-    A walker held for ``stuck_time`` (under a fifth of its desired speed) while a wall hides its goal (the social
+    A walker held for ``stuck_time`` (under ``SLOW_SHARE`` of its desired speed) while a wall hides its goal (the social
     forces balance there) follows the walls, the nearest wall kept on one side (the one that starts it towards its
     goal), until none hides the goal; one stuck again while following (a dead end, a crowd) keeps the wall on the
     other side instead. One held although it sees its goal (a slow walker before a narrow door, where the
@@ -281,8 +284,7 @@ class Escapes:
 
     def update(self, crowd: Crowd, dt: float, holding: np.ndarray) -> None:
         """Count the time each walker has been held; start, turn and end escapes (``holding``: ``crowd.holding``)."""
-        slow = ~holding & (np.linalg.norm(crowd.vel, axis=1) < 0.2 * crowd.v0)
-        crowd.slow_time = np.where(slow, crowd.slow_time + dt, 0.0)
+        crowd.slow_time = _held_for(crowd.slow_time, crowd.vel, crowd.v0, holding, dt)
         escaping = np.flatnonzero(crowd.escape)
         if len(escaping):
             clear = ~crowd.wall_grid.crossed(crowd.pos[escaping], crowd.goal[escaping]) | holding[escaping]
@@ -429,3 +431,24 @@ def place_clusters(crowd: Crowd, clusters: tuple[Section, ...]) -> None:
         group = crowd.groups.divide(count, c.group_size_weights, crowd.rng)
         v0 = at_slowest_pace(crowd.types.desired_speeds(kind, crowd.rng), group)
         crowd.add(pos, v0, kind, group, **crowd.routes.start(crowd.routes.names.index(c.route), count))
+
+
+@kernel
+def _held_for(slow_time, vel, v0, holding, dt):
+    """Each walker's time held so far: ``slow_time`` plus ``dt`` for those under ``SLOW_SHARE`` of their desired
+    speed ``v0``, 0 for the others and for people holding a spot."""
+    out = np.empty(len(v0))
+    for i in range(len(v0)):
+        slow = not holding[i] and math.sqrt(vel[i, 0] * vel[i, 0] + vel[i, 1] * vel[i, 1]) < SLOW_SHARE * v0[i]
+        out[i] = slow_time[i] + dt if slow else 0.0
+    return out
+
+
+@kernel
+def _arrived(goal, pos, radius, candidates):
+    """Which of the ``candidates`` stand within ``radius`` of their ``goal``."""
+    out = np.zeros(len(pos), np.bool_)
+    for i in range(len(pos)):
+        dx, dy = goal[i, 0] - pos[i, 0], goal[i, 1] - pos[i, 1]
+        out[i] = candidates[i] and math.sqrt(dx * dx + dy * dy) < radius[i]
+    return out
