@@ -303,8 +303,9 @@ def test_the_step_kernels_by_hand(make_scenario):
     pos = np.array([[0.0, 0.0], [10.0, 0.0], [20.0, 0.0]])
     vel = np.array([[0.0, 0.0], [2.0, 0.0], [-1.0, 0.0]])
     east = np.array([[1.0, 0.0]] * 3)
-    args = (np.full(3, 0.25), np.full(3, -1), np.ones(3, bool), forces.NO_FORCE, forces.NO_PAIRS, True, True,
-            np.nan, np.nan, 0.0, 0.1, *crowd._parameters, *WallGrid.of(np.zeros((0, 2, 2))).arrays())
+    no_groups = (np.zeros(0, np.int64), np.zeros(0, np.int64), 0)
+    args = (np.full(3, 0.25), *no_groups, np.ones(3, bool), forces.NO_FORCE, forces.NO_PAIRS, True, True, np.nan,
+            np.nan, 0.0, 0.1, *crowd._parameters, *WallGrid.of(np.zeros((0, 2, 2))).arrays())
     walking = _velocity(pos, vel, np.array([1.2, 1.0, 1.0]), east, np.array([1.2, 1.0, 0.0]), np.zeros(3, bool),
                         *args)
     assert walking == pytest.approx(np.array([[0.24, 0.0], [1.3, 0.0], [0.0, 0.0]]))

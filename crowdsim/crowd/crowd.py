@@ -155,7 +155,8 @@ class Crowd:
             pairs = forces.NO_PAIRS if every else forces.neighbour_pairs(self.pos, p.interaction_range)
             noise = self.rng.normal(0.0, p.random_force, self.pos.shape) if p.random_force > 0 else forces.NO_FORCE
             robot = (np.nan, np.nan) if robot_pos is None else (float(robot_pos[0]), float(robot_pos[1]))
-            vel = _velocity(self.pos, self.vel, self.v0, e, speed, holding, self.radius, self.group,
+            grouped, label, groups = forces.group_labels(np.where(holding, -1, self.group))  # walking members
+            vel = _velocity(self.pos, self.vel, self.v0, e, speed, holding, self.radius, grouped, label, groups,
                             self.escapes.repelled_by_walls(self), noise, pairs, every, moussaid, *robot, robot_radius,
                             dt, *self._parameters, *self.wall_grid.arrays())
             before = self.pos.copy()
@@ -194,18 +195,19 @@ def _desired(goal, pos, v0, holding, waiting, arrival_radius):
 
 
 @kernel
-def _velocity(pos, vel, v0, e, speed, holding, radius, group, repelled, noise, pairs, every, moussaid, robot_x, robot_y,
-              robot_radius, dt, tau, max_speed_factor, interaction_range, strength, lam, gamma, n, n_prime,
-              agent_strength, agent_range, step_time, fov_deg, out_of_view, wall_strength, wall_range, wall_reach,
-              gaze, coherence, repulsion, robot_strength, robot_range, walls, origin, cell, columns, rows, start,
-              members):
+def _velocity(pos, vel, v0, e, speed, holding, radius, grouped, label, groups, repelled, noise, pairs, every,
+              moussaid, robot_x, robot_y, robot_radius, dt, tau, max_speed_factor, interaction_range, strength, lam,
+              gamma, n, n_prime, agent_strength, agent_range, step_time, fov_deg, out_of_view, wall_strength,
+              wall_range, wall_reach, gaze, coherence, repulsion, robot_strength, robot_range, walls, origin, cell,
+              columns, rows, start, members):
     """Everyone's velocity after ``dt`` of every force term, walking in directions ``e`` at desired ``speed``: the
     relaxation towards the desired velocity (Helbing & Molnar 1995), the agent-agent force the crowd parameters
     choose (Moussaid 2009 over every pair or the k-d tree's ``pairs``; else Helbing & Molnar's ellipses), the walls'
-    (but for those not ``repelled``), the groups' (Moussaid 2010, walking members only), the robot's disc (unless
-    ``robot_x`` is NaN) and the random force ``noise``. Pressure from ahead stops a walker but does not make them
-    walk backwards (in a jam the field of view makes the net force point backwards, and a whole crowd would walk
-    backwards; contacts still push bodies physically); nobody exceeds ``max_speed_factor`` x their desired speed."""
+    (but for those not ``repelled``), the groups' (Moussaid 2010, on the walking members ``grouped`` of ``groups``
+    groups numbered ``label``), the robot's disc (unless ``robot_x`` is NaN) and the random force ``noise``.
+    Pressure from ahead stops a walker but does not make them walk backwards (in a jam the field of view makes the
+    net force point backwards, and a whole crowd would walk backwards; contacts still push bodies physically);
+    nobody exceeds ``max_speed_factor`` x their desired speed."""
     walking = ~holding
     acc = np.empty((len(pos), 2))
     for i in range(len(pos)):  # forces.desired_force
@@ -222,11 +224,8 @@ def _velocity(pos, vel, v0, e, speed, holding, radius, group, repelled, noise, p
     for i in range(len(pos)):
         acc[i, 0] += wall[i, 0] * repelled[i]
         acc[i, 1] += wall[i, 1] * repelled[i]
-    grouped = np.flatnonzero(walking & (group >= 0))
     if len(grouped) >= 2:
-        ids = np.unique(group[grouped])
-        acc += forces.group_members_forces(pos, vel, e, radius, grouped, np.searchsorted(ids, group[grouped]),
-                                           len(ids), gaze, coherence, repulsion,
+        acc += forces.group_members_forces(pos, vel, e, radius, grouped, label, groups, gaze, coherence, repulsion,
                                            math.radians(forces.GROUP_VISION_DEG), forces.GROUP_MARGIN)
     if not math.isnan(robot_x):
         acc += forces.obstacle_disc_force(pos, e, robot_x, robot_y, robot_radius, robot_strength, robot_range,

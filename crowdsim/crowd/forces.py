@@ -206,12 +206,20 @@ def group_forces(pos: np.ndarray, vel: np.ndarray, direction: np.ndarray, radius
     half-angle ``vision_deg``); coherence: beta2 towards the group's centre once farther than (N - 1) / 2 m;
     repulsion: beta3 away from each member nearer than the two radii plus ``margin``.
     """
-    members = np.flatnonzero(group >= 0)
+    members, label, groups = group_labels(group)
     if len(members) < 2:  # no group of two: no force, and none of the work
         return np.zeros_like(pos)
-    labels, label = np.unique(group[members], return_inverse=True)
-    return group_members_forces(pos, vel, direction, radius, members, label, len(labels), gaze, coherence,
-                                repulsion, math.radians(vision_deg), margin)
+    return group_members_forces(pos, vel, direction, radius, members, label, groups, gaze, coherence, repulsion,
+                                math.radians(vision_deg), margin)
+
+
+def group_labels(group: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """The members (indices) of ``group`` >= 0, their groups numbered 0.. (``label``) and how many groups."""
+    members = np.flatnonzero(group >= 0)
+    if len(members) < 2:  # no group of two
+        return members, members, 0
+    ids, label = np.unique(group[members], return_inverse=True)
+    return members, label.reshape(-1), len(ids)
 
 
 @kernel
