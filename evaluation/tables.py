@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 
+from pipeline.compiled import kernel
+
 _EMPTY_I = np.zeros(0, np.int64)
 
 
@@ -126,28 +128,47 @@ class ExactSum:
     non-overlapping partials: a mean over frames that does not depend on chunking or on the order of the frames."""
 
     def __init__(self):
-        self._partials: list[float] = []
+        self._partials = np.zeros(8)  # room for the partials, self._n of them in use
+        self._n = 0
         self.count = 0
 
     def add(self, values) -> None:
-        partials = self._partials
-        for x in np.asarray(values, np.float64).reshape(-1).tolist():
-            i = 0
-            for y in partials:
-                if abs(x) < abs(y):
-                    x, y = y, x
-                hi = x + y
-                lo = y - (hi - x)
-                if lo:
-                    partials[i] = lo
-                    i += 1
-                x = hi
-            partials[i:] = [x]
-        self.count += int(np.size(values))
+        values = np.asarray(values, np.float64).reshape(-1)
+        if self._n + len(values) >= len(self._partials):  # each value adds at most one partial
+            self._partials = np.concatenate([self._partials, np.zeros(self._n + len(values) + 1)])
+        self._n = _add_exactly(self._partials, self._n, values)
+        self.count += len(values)
+
+    @property
+    def partials(self) -> list[float]:
+        """The non-overlapping partials whose sum is the total, smallest first."""
+        return self._partials[:self._n].tolist()
 
     @property
     def total(self) -> float:
-        return math.fsum(self._partials)
+        return math.fsum(self.partials)
 
     def mean(self) -> float | None:
         return self.total / self.count if self.count else None
+
+
+@kernel
+def _add_exactly(partials, n, values):
+    """Shewchuk's partials ``partials[:n]`` with ``values`` added, in place; returns how many partials there are
+    now. Each value runs through the partials, smallest first, keeping the round-off of each addition as a partial
+    (two-sum: hi + lo is exactly x + y)."""
+    for x in values:
+        i = 0
+        for k in range(n):
+            y = partials[k]
+            if abs(x) < abs(y):
+                x, y = y, x
+            hi = x + y
+            lo = y - (hi - x)
+            if lo != 0.0:
+                partials[i] = lo
+                i += 1
+            x = hi
+        partials[i] = x
+        n = i + 1
+    return n

@@ -102,7 +102,7 @@ def test_state_grows_with_persons_and_tracks_not_with_frames():
         h.add(gt, tracks)
         o.add(gt, tracks)
         return (len(cm._persons), len(cm._pairs), len(h.gt_ids), len(h.pairs), len(o.together),
-                o.sums["ospa"].count, len(o.sums["ospa"]._partials) <= 2)
+                o.sums["ospa"].count, len(o.sums["ospa"].partials) <= 2)
 
     short, long = sizes(10), sizes(1000)
     assert short[:5] == long[:5] == (3, 3, 3, 3, 9)  # every pair of a person and a track shares frames in OSPA
@@ -168,3 +168,12 @@ def test_a_file_out_of_frame_order_gets_one_clear_error(tmp_path):
     path.write_text("frame,id,x,y\n0,1,0,0\n1,1,0,0\n1,2,0,0\n1,1,5,5\n")
     with pytest.raises(EvaluationInputError, match="id 1 appears twice in frame 1"):  # split over two chunks
         list(sequence_chunks(path, chunk_rows=2))
+
+
+def test_exact_sum_by_hand():
+    # 0.1 ten times is 1.0 exactly rounded (a running sum gives 0.9999999999999999); 1e16 + 1 - 1e16 keeps the 1
+    s = ExactSum()
+    s.add([0.1] * 10)
+    assert s.total == 1.0 and sum([0.1] * 10) != 1.0
+    s.add([1e16, 1.0, -1e16])
+    assert s.total == 2.0 and s.count == 13 and s.mean() == 2.0 / 13
