@@ -55,9 +55,12 @@ Memory: counts, two histograms and, per true group id ever matched, its last tra
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from pipeline.compiled import kernel
 
 from .tables import ExactSum, Slots, grown
 
@@ -213,12 +216,10 @@ class GroupMetrics:
 
     def _relations(self, frame: GroupFrame, pos, gt_group, m_row, m_track) -> None:
         """Metric 3: the pairs of matched tracks within range, scored by their relation's strength."""
-        i, j = np.triu_indices(m_row.size, 1)
-        a, b = m_row[i], m_row[j]
-        close = np.flatnonzero(np.hypot(*(pos[a] - pos[b]).T) <= self.relation_range)
-        if close.size == 0:
+        i, j = _close_pairs(pos, m_row, self.relation_range)
+        if i.size == 0:
             return
-        a, b, i, j = a[close], b[close], i[close], j[close]
+        a, b = m_row[i], m_row[j]
         label = (gt_group[a] >= 0) & (gt_group[a] == gt_group[b])
         ra, rb = _i(frame.relation_a), _i(frame.relation_b)
         strength = np.asarray(frame.relation_strength, np.float64).reshape(-1)
@@ -233,7 +234,7 @@ class GroupMetrics:
         ti, tj = t[i], t[j]
         score, _ = _lookup(rel_key, strength, np.minimum(ti, tj) * ids.size + np.maximum(ti, tj), 0.0)
         related = score >= self.relation_threshold
-        self._pairs += close.size
+        self._pairs += i.size
         self._pos += int(label.sum())
         self._related += int(related.sum())
         self._related_pos += int((related & label).sum())
@@ -283,3 +284,19 @@ class GroupMetrics:
             "tracking": {"gt": self._true, "tp": self._tp23, "fp": self._fp, "fn": fn, "id_switches": self._ids,
                          "mota": None if self._true == 0 else 1.0 - (fn + self._fp + self._ids) / self._true},
         }
+
+
+@kernel
+def _close_pairs(pos, rows, reach):
+    """The pairs (i, j), i < j, of ``rows`` (indices into ``pos``) whose positions lie within ``reach`` of each
+    other, in ``np.triu_indices``' order."""
+    n = len(rows)
+    first, second = np.empty(n * (n - 1) // 2, np.int64), np.empty(n * (n - 1) // 2, np.int64)
+    m = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            a, b = rows[i], rows[j]
+            if math.hypot(pos[a, 0] - pos[b, 0], pos[a, 1] - pos[b, 1]) <= reach:
+                first[m], second[m] = i, j
+                m += 1
+    return first[:m], second[:m]

@@ -243,3 +243,14 @@ def test_against_plain_reference_on_random_frames():
     tp, tp1, det_n, true_n, (rn, rd, pn, pd) = reference(frames)
     assert (s["t_2_3"]["tp"], s["t_1"]["tp"], s["detected_groups"], s["true_groups"]) == (tp, tp1, det_n, true_n)
     assert s["gmitre"]["recall"] == approx(rn / rd) and s["gmitre"]["precision"] == approx(pn / pd)
+
+
+def test_close_pairs_in_triangle_order_by_hand():
+    from evaluation.groups import _close_pairs
+
+    # rows 3, 0, 2 of four points: rows 3 and 0 are 2.5 m apart, 3 and 2 exactly 3 m (kept: within is inclusive),
+    # 0 and 2 are 5.2 m apart
+    pos = np.array([[0.0, 0.0], [9.0, 9.0], [1.5, 5.0], [1.5, 2.0]])
+    i, j = _close_pairs(pos, np.array([3, 0, 2]), 3.0)
+    assert i.tolist() == [0, 0] and j.tolist() == [1, 2]
+    assert _close_pairs(pos, np.array([1]), 3.0)[0].size == 0
