@@ -223,3 +223,14 @@ def test_noise_does_not_turn_flat_wall_pieces_into_persons():
     found = sum(len(detector.detect(scan_of(body + rng.normal(0, 0.012, body.size)))) for _ in range(1000))
     assert false <= 5
     assert found == 1000
+
+
+def test_person_centres_by_hand():
+    from pipeline.detectors.laser_segments import _person_centres
+
+    # a round segment (2, -0.2), (1.9, 0), (2, 0.2): chord 0.4 m wide, its middle point 0.1 m nearer the sensor
+    # (bulge 0.1 m), centroid (5.9 / 3, 0), centre pi / 8 x 0.4 m beyond it; a flat wall piece at x = 5 (bulge 0)
+    # and a two-point segment are not persons
+    p = np.array([[2.0, -0.2], [1.9, 0.0], [2.0, 0.2], [5.0, -0.3], [5.0, 0.0], [5.0, 0.3], [8.0, 0.0], [8.0, 0.2]])
+    centre = _person_centres(p, np.array([0, 3, 6]), np.array([3, 3, 2]), 3, 0.1, 0.9, 0.03)
+    assert centre == pytest.approx(np.array([[5.9 / 3 + np.pi / 8 * 0.4, 0.0]]))

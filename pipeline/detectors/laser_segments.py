@@ -2,15 +2,17 @@
 
 A segment is a run of consecutive returns whose neighbours are closer than the jump distance. It is taken for a
 person when it has enough points, a person-like width, and bulges towards the sensor (a leg pair or hip is round,
-a wall fragment is flat). Everything is computed on arrays over beams and segments at once.
+a wall fragment is flat). The segments are measured in one compiled pass.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.compiled import kernel, segment_sum
 from pipeline.params import param
 from pipeline.types import DetectedPersons, LaserScan
 
@@ -47,30 +49,43 @@ class SegmentDetector:
         return seg.label, seg.points
 
     def detect(self, scan: LaserScan) -> DetectedPersons:
-        labels, p = self.segments(scan)
-        if len(p) == 0:
+        seg = jump_segments(scan, self.jump_distance)
+        if len(seg.points) == 0:
             return DetectedPersons.empty(scan.stamp, scan.frame, "laser2d")
-        starts = np.flatnonzero(np.concatenate([[True], np.diff(labels) > 0]))
-        ends = np.concatenate([starts[1:], [len(p)]]) - 1
-        count = ends - starts + 1
-        first, last = p[starts], p[ends]
-        chord = last - first
-        width = np.linalg.norm(chord, axis=1)
-        # depth of each point behind its segment's chord, towards the sensor counted positive
-        normal = np.stack([chord[:, 1], -chord[:, 0]], 1) / np.maximum(width, 1e-9)[:, None]
-        normal *= np.where(np.einsum("ij,ij->i", normal, first) > 0, -1.0, 1.0)[:, None]
-        bulge_pt = np.einsum("ij,ij->i", p - first[labels], normal[labels])
-        # the mean over the interior points (the chord's ends lie on it by construction), not the largest depth:
-        # one noisy return must not make a flat wall piece look round
-        bulge = np.add.reduceat(bulge_pt, starts) / np.maximum(count - 2, 1)
-        centroid = np.add.reduceat(p, starts) / count[:, None]
-        keep = ((count >= self.min_points) & (width >= self.min_width) & (width <= self.max_width)
-                & (bulge >= self.min_bulge))
-        c, w = centroid[keep], width[keep]
-        # the visible arc's centroid lies pi/4 r in front of a round body's centre (r = width / 2)
-        ray = c / np.maximum(np.linalg.norm(c, axis=1), 1e-9)[:, None]
-        centre = c + ray * (np.pi / 8) * w[:, None]
+        centre = _person_centres(np.ascontiguousarray(seg.points), seg.start, seg.count, self.min_points,
+                                 self.min_width, self.max_width, self.min_bulge)
         out = DetectedPersons.on_floor(scan.stamp, scan.frame, "laser2d", self._next_id, centre,
                                        self.position_variance)
         self._next_id += len(centre)
         return out
+
+
+@kernel
+def _person_centres(p, start, count, min_points, min_width, max_width, min_bulge):
+    """The body centres [k, 2] of the segments (``count`` points of ``p`` from ``start``) taken for persons.
+
+    A segment's bulge is the mean depth of its interior points behind its chord, towards the sensor counted positive:
+    the mean, not the largest depth, so that one noisy return does not make a flat wall piece look round. The
+    visible arc's centroid lies pi/4 r in front of a round body's centre (r = width / 2). The sums are numpy's
+    (``segment_sum``), in the order ``np.add.reduceat`` adds."""
+    centre, depth = np.empty((len(start), 2)), np.empty(len(p))
+    x, y = p[:, 0].copy(), p[:, 1].copy()
+    kept = 0
+    for s in range(len(start)):
+        a, n = start[s], count[s]
+        fx, fy, cx, cy = p[a, 0], p[a, 1], p[a + n - 1, 0] - p[a, 0], p[a + n - 1, 1] - p[a, 1]
+        width = math.sqrt(cx * cx + cy * cy)
+        nx, ny = cy / max(width, 1e-9), -cx / max(width, 1e-9)
+        if nx * fx + ny * fy > 0:  # the normal towards the sensor
+            nx, ny = -nx, -ny
+        for i in range(a, a + n):
+            depth[i] = (p[i, 0] - fx) * nx + (p[i, 1] - fy) * ny
+        bulge = segment_sum(depth, a, n) / max(n - 2, 1)
+        if not (n >= min_points and width >= min_width and width <= max_width and bulge >= min_bulge):
+            continue
+        mx, my = segment_sum(x, a, n) / n, segment_sum(y, a, n) / n
+        norm = max(math.sqrt(mx * mx + my * my), 1e-9)
+        centre[kept, 0] = mx + mx / norm * (np.pi / 8) * width
+        centre[kept, 1] = my + my / norm * (np.pi / 8) * width
+        kept += 1
+    return centre[:kept]
