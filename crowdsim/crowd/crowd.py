@@ -210,7 +210,7 @@ def _velocity(pos, vel, v0, e, speed, holding, radius, grouped, label, groups, r
     nobody exceeds ``max_speed_factor`` x their desired speed."""
     walking = ~holding
     acc = np.empty((len(pos), 2))
-    for i in range(len(pos)):  # forces.desired_force
+    for i in range(len(pos)):  # the relaxation: (v0 e - v) / tau
         acc[i, 0] = (speed[i] * e[i, 0] - vel[i, 0]) / tau
         acc[i, 1] = (speed[i] * e[i, 1] - vel[i, 1]) / tau
     if moussaid:

@@ -1,12 +1,12 @@
 """Many small worlds stepped as one: the environments' crowds and robots on arrays over every world at once.
 
 A gym step is a few simulation ticks, and one world of 10-20 people is too small for numpy to pay off. Here E worlds
-of N people each live in [E, N] arrays; the robots move by array calls over all worlds, and the persons of every
-world through all the ticks of a step in one compiled call (``_people_ticks``) made of the scenario crowd's own force
-kernels (``crowdsim.crowd.forces``: Moussaid et al. 2009 between every two persons, Helbing, Farkas & Vicsek 2000
-from the room's walls, the robot's disc, Helbing & Molnar's field of view) with the crowd's parameters. One
-environment is the same code with E = 1, so a batched world is the single environment's world, bit for bit: each
-world is stepped on its own, in the same order.
+of N people each live in [E, N] arrays. The robots of all worlds move through all the ticks of a step in one call of
+the robot's own drive kernel (``crowdsim.robot.drive``), and the persons in one compiled call (``_people_ticks``)
+made of the scenario crowd's own force kernels (``crowdsim.crowd.forces``: Moussaid et al. 2009 between every two
+persons, Helbing, Farkas & Vicsek 2000 from the room's walls, the robot's disc, Helbing & Molnar's field of view)
+with the crowd's parameters. One environment is the same code with E = 1, so a batched world is the single
+environment's world, bit for bit: each world is stepped on its own, in the same order.
 
 What the scenario crowd has and these worlds do not: sources, sinks, queues, groups, walls other than the room's
 four, and the pymunk contact solver. People walk routes round and round (``layouts``); overlapping bodies are
