@@ -1,65 +1,73 @@
-"""Exact ray casts against the people's bodies (torso cylinder, head sphere, two leg capsules), vectorized over rays.
+"""Exact ray casts against the people's bodies (torso cylinder, head sphere, two leg capsules), compiled.
 
 The cameras use these for what OpenGL cannot give cheaply: each person's silhouette as it would show with nothing in
 front (the visible fraction's denominator), and the people of a wall camera's image. Under Mesa every drawn geom
 costs about 20 microseconds whatever its size on screen, so 75 people of four parts cost 6-7 ms a pass; the rays of
 the pixels they cover cost a fraction of that, and the surfaces are the exact primitives the lasers see.
 
-``cast_part`` casts rays against one part of many persons (the camera keeps the nearest part per pixel). Each
-primitive takes ray origins relative to the primitive and directions ``d`` of any length, and returns the ray
-parameter t of the first surface point o + t d with t >= 0 (inf where the ray misses). Single precision: relative
-to each person, a millimetre is far below a pixel here.
+``nearest_parts`` casts the rays of the pixels of each person's box against their four parts and keeps the nearest
+part per pixel, in one kernel (the cost was numpy's per-call overhead: 3.7 ms for the 93 people of a wall camera's
+view). Each primitive is a scalar kernel that takes a ray origin relative to the primitive and a direction d of any
+length, and returns the ray parameter t of the first surface point o + t d with t >= 0 (inf where the ray misses).
+Single precision, as every value is float32: relative to each person, a millimetre is far below a pixel here.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from pipeline.compiled import kernel
+
 from . import body
 
 TORSO, HEAD, LEFT_LEG, RIGHT_LEG = range(4)  # the parts, in the order of ``part_box_corners``
 F = np.float32
+_ZERO, _TINY, _INF = F(0.0), F(1e-12), F(np.inf)
 
 
-def ray_vertical_cylinder(px, py, oz, dx, dy, dz, r, z0, z1) -> np.ndarray:
+@kernel
+def ray_vertical_cylinder(px, py, oz, dx, dy, dz, r, z0, z1):
     """A closed cylinder of radius r about the vertical axis through the origin, between heights z0 and z1
     (ray origin (px, py, oz) relative to the axis)."""
     a = dx * dx + dy * dy
     b = dx * px + dy * py  # half the linear coefficient
     c = px * px + py * py - r * r
     disc = b * b - a * c
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sq = np.sqrt(np.maximum(disc, 0))
+    if not disc >= _ZERO:  # misses the infinite cylinder
+        return _INF
+    if a < _TINY:  # a vertical ray: inside the circle or not at all
+        t0, t1 = (-_INF, _INF) if c <= _ZERO else (_INF, -_INF)
+    else:
+        sq = np.sqrt(disc)
         t0, t1 = (-b - sq) / a, (-b + sq) / a
-        flat = a < 1e-12  # a vertical ray: inside the circle or not at all
-        t0 = np.where(flat, np.where(c <= 0, -np.inf, np.inf), t0)
-        t1 = np.where(flat, np.where(c <= 0, np.inf, -np.inf), t1)
+    if abs(dz) < _TINY:  # a level ray: between the ends or not at all
+        tz0, tz1 = (-_INF, _INF) if z0 <= oz <= z1 else (_INF, -_INF)
+    else:
         za, zb = (z0 - oz) / dz, (z1 - oz) / dz
-        level = np.abs(dz) < 1e-12
-        inside = (z0 <= oz) & (oz <= z1)
-        tz0 = np.where(level, np.where(inside, -np.inf, np.inf), np.minimum(za, zb))
-        tz1 = np.where(level, np.where(inside, np.inf, -np.inf), np.maximum(za, zb))
-    enter = np.maximum(np.maximum(t0, tz0), 0)
-    return np.where((disc >= 0) & (enter <= np.minimum(t1, tz1)), enter, np.inf).astype(F)
+        tz0, tz1 = min(za, zb), max(za, zb)
+    enter = max(max(t0, tz0), _ZERO)
+    return enter if enter <= min(t1, tz1) else _INF
 
 
-def ray_sphere(wx, wy, wz, dx, dy, dz, r) -> np.ndarray:
+@kernel
+def ray_sphere(wx, wy, wz, dx, dy, dz, r):
     """A sphere of radius r about the origin (ray origin w relative to the centre)."""
     a = dx * dx + dy * dy + dz * dz
     b = dx * wx + dy * wy + dz * wz  # half the linear coefficient
     disc = b * b - a * (wx * wx + wy * wy + wz * wz - r * r)
-    sq = np.sqrt(np.maximum(disc, 0))
-    t = np.maximum((-b - sq) / a, 0)
-    return np.where((disc >= 0) & (-b + sq >= 0), t, np.inf).astype(F)
+    if not disc >= _ZERO:
+        return _INF
+    sq = np.sqrt(disc)
+    return max((-b - sq) / a, _ZERO) if -b + sq >= _ZERO else _INF
 
 
-def ray_capsule(wx, wy, wz, dx, dy, dz, e, r, start_cap: bool = True) -> np.ndarray:
-    """A capsule of radius r round the segment from the origin to e [n, 3] (ray origin w relative to its start).
+@kernel
+def ray_capsule(wx, wy, wz, dx, dy, dz, ex, ey, ez, r, start_cap):
+    """A capsule of radius r round the segment from the origin to e (ray origin w relative to its start).
 
     The capsule is the union of its side (the infinite cylinder round the segment's line, where the entry point
     projects onto the segment) and the spheres at the two ends, so its first hit is the nearest of theirs.
     ``start_cap=False`` leaves out the sphere at the start, for a capsule whose start lies inside another body."""
-    ex, ey, ez = e[:, 0], e[:, 1], e[:, 2]
     A = dx * dx + dy * dy + dz * dz
     B = dx * ex + dy * ey + dz * ez
     C = ex * ex + ey * ey + ez * ez
@@ -69,35 +77,106 @@ def ray_capsule(wx, wy, wz, dx, dy, dz, e, r, start_cap: bool = True) -> np.ndar
     # |w + t d|^2 - (E + t B)^2 / C = r^2, times C
     qa, qb, qc = A * C - B * B, C * D - E * B, C * W - E * E - r * r * C
     disc = qb * qb - qa * qc
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (-qb - np.sqrt(np.maximum(disc, 0))) / qa
+    side = _INF
+    if disc >= _ZERO and qa > _TINY:
+        t = (-qb - np.sqrt(disc)) / qa
         s = (E + t * B) / C
-    side = np.where((disc >= 0) & (qa > 1e-12) & (t >= 0) & (s >= 0) & (s <= 1), t, np.inf).astype(F)
-    side = np.minimum(side, ray_sphere(wx - ex, wy - ey, wz - ez, dx, dy, dz, r))
-    return np.minimum(side, ray_sphere(wx, wy, wz, dx, dy, dz, r)) if start_cap else side
+        if t >= _ZERO and s >= _ZERO and s <= F(1.0):
+            side = t
+    side = min(side, ray_sphere(wx - ex, wy - ey, wz - ez, dx, dy, dz, r))
+    return min(side, ray_sphere(wx, wy, wz, dx, dy, dz, r)) if start_cap else side
 
 
-def cast_part(scene, slot: np.ndarray, part: int, o: np.ndarray, owner: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """Ray parameters t [n] (inf for a miss) of rays from ``o`` [3] along ``d`` [n, 3] to one ``part`` of the body
-    of the person in ``slot[owner[i]]`` of the scene, each body at its own size. What depends on the person alone
-    is worked out once per person, the rest per ray."""
-    k = scene.person_scale[slot].astype(F)
-    ox, oy, oz = (F(c) for c in o)
-    dx, dy, dz = d.T.astype(F)
+@kernel
+def _part_values(o, part, sizes, xy, hips, feet):
+    """One part of one person as its primitive takes it: the ray origin relative to it, then its measures (a torso's
+    radius, bottom and top; a head's radius; a leg's axis and radius)."""
+    ox, oy, oz = o
+    values = np.zeros(7, np.float32)
     if part == TORSO:
-        x, y = scene.person_xy[slot].T.astype(F)
-        return ray_vertical_cylinder((ox - x)[owner], (oy - y)[owner], oz, dx, dy, dz,
-                                     (F(body.TORSO_RADIUS) * k)[owner], (F(body.TORSO_BOTTOM) * k)[owner],
-                                     (F(body.TORSO_TOP) * k)[owner])
-    if part == HEAD:
-        x, y = scene.person_xy[slot].T.astype(F)
-        return ray_sphere((ox - x)[owner], (oy - y)[owner], (oz - F(body.HEAD_CENTRE) * k)[owner], dx, dy, dz,
-                          (F(body.HEAD_RADIUS) * k)[owner])
-    leg = part - LEFT_LEG
-    a, b = scene.hips[slot, leg].astype(F), scene.feet[slot, leg].astype(F)
-    # where the hip's end of the leg lies inside the torso, a ray meets the torso before it
-    return ray_capsule((ox - a[:, 0])[owner], (oy - a[:, 1])[owner], (oz - a[:, 2])[owner], dx, dy, dz,
-                       (b - a)[owner], (F(body.LEG_RADIUS) * k)[owner], start_cap=not body.HIP_INSIDE_TORSO)
+        values[0], values[1], values[2], values[3], values[4], values[5] = (ox - xy[0], oy - xy[1], oz, sizes[0],
+                                                                            sizes[1], sizes[2])
+    elif part == HEAD:
+        values[0], values[1], values[2], values[3] = ox - xy[0], oy - xy[1], oz - sizes[3], sizes[4]
+    else:
+        a, b = hips[part - LEFT_LEG], feet[part - LEFT_LEG]
+        values[0], values[1], values[2] = ox - a[0], oy - a[1], oz - a[2]
+        values[3], values[4], values[5], values[6] = b[0] - a[0], b[1] - a[1], b[2] - a[2], sizes[5]
+    return values
+
+
+@kernel
+def nearest_parts(origin, rot, f, cx, cy, width, height, part_lo, part_hi, cast, sizes, xy, hips, feet, start_cap):
+    """Each person's silhouette: the nearest part at every pixel of their box that a ray of the camera meets.
+
+    Person i's box is the union of the boxes [part_lo, part_hi) [n, 4, 2] of its parts, cast where ``cast``. A
+    part's box pixels inside the image are all cast; where it reaches beyond the image, the pixels out there only
+    on even rows and columns. On a tie the earlier part (torso, head, left leg, right leg) keeps the pixel. The camera
+    is at ``origin`` with the optical frame's axes ``rot``, focal length f and centre (cx, cy) in pixels; every
+    person's values are float32. Returns the hits by person, then row by row: person, u, v, z-depth (the ray's
+    parameter, as its optical z is 1), part, and the pixels each stands for (1 inside the image, 4 outside)."""
+    n = len(cast)
+    o = (np.float32(origin[0]), np.float32(origin[1]), np.float32(origin[2]))
+    lo = np.empty((n, 2), np.int64)
+    box = np.zeros((n, 2), np.int64)
+    start = np.zeros(n + 1, np.int64)
+    for i in range(n):
+        lo[i, 0], lo[i, 1] = part_lo[i, :, 0].min(), part_lo[i, :, 1].min()
+        if cast[i]:
+            box[i, 0], box[i, 1] = part_hi[i, :, 0].max() - lo[i, 0], part_hi[i, :, 1].max() - lo[i, 1]
+        start[i + 1] = start[i] + box[i, 0] * box[i, 1]
+    depth = np.full(start[n], np.inf, np.float32)
+    nearest_part = np.zeros(start[n], np.int64)
+    for i in range(n):
+        if not cast[i]:
+            continue
+        for part in range(4):
+            p = _part_values(o, part, sizes[i], xy[i], hips[i], feet[i])
+            u0, v0, u1, v1 = part_lo[i, part, 0], part_lo[i, part, 1], part_hi[i, part, 0], part_hi[i, part, 1]
+            crosses = u0 < 0 or v0 < 0 or u1 > width or v1 > height
+            for v in range(v0, v1):
+                y = (v + 0.5 - cy) / f
+                row = start[i] + (v - lo[i, 1]) * box[i, 0] - lo[i, 0]
+                for u in range(u0, u1):
+                    if crosses and not (0 <= u < width and 0 <= v < height) and (u % 2 != 0 or v % 2 != 0):
+                        continue
+                    x = (u + 0.5 - cx) / f
+                    dx = np.float32(x * rot[0, 0] + y * rot[0, 1] + rot[0, 2])
+                    dy = np.float32(x * rot[1, 0] + y * rot[1, 1] + rot[1, 2])
+                    dz = np.float32(x * rot[2, 0] + y * rot[2, 1] + rot[2, 2])
+                    if part == TORSO:
+                        t = ray_vertical_cylinder(p[0], p[1], p[2], dx, dy, dz, p[3], p[4], p[5])
+                    elif part == HEAD:
+                        t = ray_sphere(p[0], p[1], p[2], dx, dy, dz, p[3])
+                    else:
+                        t = ray_capsule(p[0], p[1], p[2], dx, dy, dz, p[3], p[4], p[5], p[6], start_cap)
+                    if t < depth[row + u]:
+                        depth[row + u] = t
+                        nearest_part[row + u] = part
+    hits = 0
+    for at in range(start[n]):
+        hits += depth[at] < np.inf
+    owner, us, vs = np.empty(hits, np.int64), np.empty(hits, np.int64), np.empty(hits, np.int64)
+    z, parts, weight = np.empty(hits, np.float32), np.empty(hits, np.int64), np.empty(hits)
+    k = 0
+    for i in range(n):
+        for local in range(start[i + 1] - start[i]):
+            at = start[i] + local
+            if depth[at] < np.inf:
+                u, v = lo[i, 0] + local % box[i, 0], lo[i, 1] + local // box[i, 0]
+                owner[k], us[k], vs[k], z[k], parts[k] = i, u, v, depth[at], nearest_part[at]
+                weight[k] = 1.0 if 0 <= u < width and 0 <= v < height else 4.0
+                k += 1
+    return owner, us, vs, z, parts, weight
+
+
+def bodies(scene, slot: np.ndarray) -> tuple[np.ndarray, ...]:
+    """What ``nearest_parts`` takes of the persons in ``slot``, in float32: their sizes (torso radius, bottom and
+    top, head centre and radius, leg radius, each at the person's own scale), positions, hips and leg ends."""
+    k = scene.person_scale[slot].astype(F)
+    sizes = np.stack([F(c) * k for c in (body.TORSO_RADIUS, body.TORSO_BOTTOM, body.TORSO_TOP, body.HEAD_CENTRE,
+                                         body.HEAD_RADIUS, body.LEG_RADIUS)], 1)
+    return sizes, scene.person_xy[slot].astype(F), scene.hips[slot].astype(F), scene.feet[slot].astype(F)
 
 
 PART_CORNERS = (slice(0, 8), slice(8, 16), slice(16, 24), slice(24, 32))  # of part_box_corners, by part

@@ -502,7 +502,8 @@ class WallCamera(CameraSensor):
 
 def person_pixels(scene: Scene, camera: str, intrinsics: Intrinsics, slots: np.ndarray):
     """Every pixel of each person's silhouette as it would show with nobody and nothing in front and no image
-    border: each part of the body ray-cast on the pixels of its projected bounding box, the nearest part kept.
+    border: each part of the body ray-cast on the pixels of its projected bounding box, the nearest part kept
+    (``bodycast.nearest_parts``).
 
     Returns the hits as ``owner`` (index into ``slots``), ``u``, ``v``, z-depth, body part, and the weight each
     stands for: pixels inside the image are all cast; beyond its border (within one image size, which bounds the
@@ -519,48 +520,10 @@ def person_pixels(scene: Scene, camera: str, intrinsics: Intrinsics, slots: np.n
     reach_lo, reach_hi = [-k.width, -k.height], [2 * k.width, 2 * k.height]
     part_lo = np.clip(np.floor(uv.min(axis=2)), reach_lo, reach_hi).astype(np.int64)  # [n, 4 parts, 2]
     part_hi = np.clip(np.ceil(uv.max(axis=2)), reach_lo, reach_hi).astype(np.int64)
-    lo, hi = part_lo.min(axis=1), part_hi.max(axis=1)  # the person's box
-    cast = in_front & (hi > 0).all(axis=1) & (lo < [k.width, k.height]).all(axis=1)
-    # the nearest part at each pixel of each person's box, the boxes one after another
-    width = np.where(cast, hi[:, 0] - lo[:, 0], 0)
-    area = width * np.where(cast, hi[:, 1] - lo[:, 1], 0)
-    end = np.cumsum(area)
-    start = end - area
-    nearest = np.full(end[-1] if len(end) else 0, np.inf, np.float32)
-    nearest_part = np.zeros(len(nearest), np.int8)
-    for part in range(4):
-        owner, u, v = _box_pixels(k, part_lo[:, part], part_hi[:, part], cast)
-        rays = (k.rays(u, v) @ rot.T).astype(np.float32)  # optical z = 1: the ray parameter t is the z-depth
-        t = bodycast.cast_part(scene, slots, part, origin, owner, rays)
-        hit = np.flatnonzero(t < np.inf)
-        owner, t = owner[hit], t[hit]
-        at = start[owner] + (v[hit] - lo[owner, 1]) * width[owner] + u[hit] - lo[owner, 0]
-        nearer = t < nearest[at]
-        nearest[at[nearer]] = t[nearer]
-        nearest_part[at[nearer]] = part
-    at = np.flatnonzero(nearest < np.inf)
-    owner = np.searchsorted(end, at, side="right")
-    local = at - start[owner]
-    u, v = lo[owner, 0] + local % width[owner], lo[owner, 1] + local // width[owner]
-    inside = (u >= 0) & (u < k.width) & (v >= 0) & (v < k.height)
-    return owner, u, v, nearest[at], nearest_part[at].astype(np.int64), np.where(inside, 1.0, 4.0)
-
-
-def _box_pixels(k: Intrinsics, lo: np.ndarray, hi: np.ndarray, cast: np.ndarray):
-    """The pixels (owner, u, v) of boxes [lo, hi) [n, 2] of the owners ``cast``: all of those in the image, every
-    other row and column of those outside it."""
-    lo = lo.astype(np.int32)  # (32-bit division is the cost here)
-    size = np.where(cast[:, None], np.maximum(hi.astype(np.int32) - lo, 0), 0)
-    count = size[:, 0] * size[:, 1]
-    owner = np.repeat(np.arange(len(lo), dtype=np.int32), count)
-    local = np.arange(count.sum(), dtype=np.int32) - np.repeat(np.cumsum(count, dtype=np.int32) - count, count)
-    row, column = np.divmod(local, size[owner, 0])
-    u, v = lo[owner, 0] + column, lo[owner, 1] + row
-    crosses = cast & ((lo < 0) | (hi > [k.width, k.height])).any(axis=1)
-    if not crosses.any():
-        return owner, u, v
-    keep = ~crosses[owner] | ((u >= 0) & (u < k.width) & (v >= 0) & (v < k.height)) | ((u % 2 == 0) & (v % 2 == 0))
-    return owner[keep], u[keep], v[keep]
+    cast = in_front & (part_hi.max(axis=1) > 0).all(axis=1) & (part_lo.min(axis=1) < [k.width, k.height]).all(axis=1)
+    cx, cy = k.centre
+    return bodycast.nearest_parts(origin, rot, k.f, cx, cy, k.width, k.height, part_lo, part_hi, cast,
+                                  *bodycast.bodies(scene, slots), not body.HIP_INSIDE_TORSO)
 
 
 def person_boxes(scene: Scene, camera: str, intrinsics: Intrinsics, seg: np.ndarray):

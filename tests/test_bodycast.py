@@ -11,36 +11,68 @@ from sensors.scene import Scene
 F = np.float32
 
 
-def rays(origins, directions):
+def cast(primitive, origins, directions, *measures):
+    """The scalar kernel ``primitive`` on each ray (origin relative to the primitive, direction), in float32."""
     o, d = np.asarray(origins, F).reshape(-1, 3), np.asarray(directions, F).reshape(-1, 3)
-    return (*o.T, *d.T)
+    return np.array([primitive(*oi, *di, *measures) for oi, di in zip(o, d)], F)
 
 
 def test_capsule_side_end_caps_and_a_ray_along_its_axis():
     # segment (0,0,0)-(0,0,-1), radius 0.1
-    e = np.array([[0.0, 0.0, -1.0]] * 5, F)
-    t = bodycast.ray_capsule(*rays([[1, 0, -0.5], [0, 0, 1], [1, 0, 0.05], [1, 0, -0.5], [1, 0, 0.2]],
-                                   [[-1, 0, 0], [0, 0, -1], [-1, 0, 0], [-2, 0, 0], [-1, 0, 0]]), e, F(0.1))
+    t = cast(bodycast.ray_capsule, [[1, 0, -0.5], [0, 0, 1], [1, 0, 0.05], [1, 0, -0.5], [1, 0, 0.2]],
+             [[-1, 0, 0], [0, 0, -1], [-1, 0, 0], [-2, 0, 0], [-1, 0, 0]], F(0), F(0), F(-1), F(0.1), True)
     # the side at 0.9; down the axis onto the top cap at 1 - 0.1; the cap at height 0.05, where its section's radius
     # is sqrt(0.1^2 - 0.05^2); a direction twice as long halves t; above the cap: a miss
     np.testing.assert_allclose(t[:4], [0.9, 0.9, 1 - np.sqrt(0.0075), 0.45], rtol=1e-5)
     assert np.isinf(t[4])
+    # without the start's cap, the ray down the axis (parallel to the side) passes the start and meets the far
+    # end's cap at its top, 1 + 1 - 0.1 away
+    below = cast(bodycast.ray_capsule, [[0, 0, 1]], [[0, 0, -1]], F(0), F(0), F(-1), F(0.1), False)
+    np.testing.assert_allclose(below, [1.9], rtol=1e-6)
 
 
 def test_closed_cylinder_side_top_and_miss():
     r, z0, z1 = F(0.2), F(0.5), F(1.5)
-    o = np.array([[2, 0, 1], [0.1, 0, 3], [2, 0, 1.6], [2, 0, 1], [0.3, 0, 3]], F)
-    d = np.array([[-1, 0, 0], [0, 0, -1], [-1, 0, 0], [1, 0, 0], [0, 0, -1]], F)
-    t = bodycast.ray_vertical_cylinder(*o.T, *d.T, r, z0, z1)
-    # side at 2 - 0.2; straight down onto the top at 3 - 1.5; above it; pointing away; outside the circle
+    o = [[2, 0, 1], [0.1, 0, 3], [2, 0, 1.6], [2, 0, 1], [0.3, 0, 3], [0, 0, 1]]
+    d = [[-1, 0, 0], [0, 0, -1], [-1, 0, 0], [1, 0, 0], [0, 0, -1], [1, 0, 0]]
+    t = cast(bodycast.ray_vertical_cylinder, o, d, r, z0, z1)
+    # side at 2 - 0.2; straight down onto the top at 3 - 1.5; above it; pointing away; outside the circle; from
+    # the axis, inside: at once
     np.testing.assert_allclose(t[:2], [1.8, 1.5], rtol=1e-6)
-    assert np.isinf(t[2:]).all()
+    assert np.isinf(t[2:5]).all() and t[5] == 0.0
 
 
 def test_sphere_with_a_long_direction():
-    t = bodycast.ray_sphere(*rays([[0, 0, 1], [0, 0.2, 1]], [[0, 0, -2], [0, 0, -2]]), F(0.1))
+    t = cast(bodycast.ray_sphere, [[0, 0, 1], [0, 0.2, 1], [0, 0, 1]], [[0, 0, -2], [0, 0, -2], [0, 0, 2]], F(0.1))
+    # the near side at (1 - 0.1) / 2; a miss to one side; one pointing away
     np.testing.assert_allclose(t[0], 0.45, rtol=1e-6)
-    assert np.isinf(t[1])
+    assert np.isinf(t[1:]).all()
+
+
+def test_nearest_parts_of_a_person_in_a_level_camera():
+    # a level camera 4 m in front of an adult standing at the origin, looking +x from 1 m up; f = 100 px and the
+    # centre at (49.5, 49.5), so pixel (49, 49) looks straight along +x
+    scene = Scene(np.zeros((0, 2, 2)), 0.425, 1)
+    scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1]), np.array([[0.0, 0.0]]))
+    scene.person_scale[0] = 1.0
+    origin = np.array([-4.0, 0.0, 1.0])
+    rot = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])  # optical x right = -y, y down = -z
+    part_lo = np.zeros((1, 4, 2), np.int64)
+    part_hi = np.array([[[100, 100], [100, 100], [0, 0], [0, 0]]])  # the legs' boxes left empty
+    owner, u, v, z, part, weight = bodycast.nearest_parts(origin, rot, 100.0, 49.5, 49.5, 100, 100, part_lo, part_hi,
+                                                          np.array([True]), *bodycast.bodies(scene, np.array([0])),
+                                                          False)
+    hit = {(a, b): (c, p) for a, b, c, p in zip(u, v, z, part)}
+    # straight ahead: the torso's front, 4 - 0.18 away (the z-depth is the ray's parameter, as its optical z is 1)
+    t, p = hit[(49, 49)]
+    assert p == bodycast.TORSO and t == pytest.approx(4 - body.TORSO_RADIUS, abs=1e-5)
+    # row 34 looks up at 0.15 per metre: (t - 4)^2 + (0.15 t - 0.62)^2 = 0.1^2 (the head's centre 0.62 m above the
+    # camera), whose nearer root is t = (8.186 - sqrt(8.186^2 - 4 x 1.0225 x 16.3744)) / (2 x 1.0225) = 3.90599
+    t, p = hit[(49, 34)]
+    assert p == bodycast.HEAD and t == pytest.approx(3.90599, abs=1e-4)
+    # by rows; every hit in the image stands for one pixel; the top row looks 0.5 m up at 1 m: over the head
+    assert (np.diff(v) >= 0).all() and (owner == 0).all() and (weight == 1.0).all()
+    assert (49, 0) not in hit
 
 
 CAM = {"name": "wall_cam", "position": [0.0, 0.0, 1.2], "yaw": 0.0, "pitch": 0.0, "fovy_deg": 50.0,
@@ -98,9 +130,7 @@ def test_the_hip_end_of_a_leg_lies_inside_the_torso():
     target = hip + body.LEG_RADIUS * rng.uniform(-1, 1, (500, 3)) / np.sqrt(3)
     origin = np.column_stack([rng.uniform(-5, 5, (500, 2)), rng.uniform(0.0, 3.0, 500)])
     origin[:, :2] *= 1 + 1 / np.linalg.norm(origin[:, :2], axis=1)[:, None]  # at least 1 m from the axis
-    d = (target - origin).astype(F)
-    w = (origin - hip).astype(F)
-    t_hip = bodycast.ray_sphere(*w.T, *d.T, F(body.LEG_RADIUS))
-    t_torso = bodycast.ray_vertical_cylinder(*origin.T.astype(F), *d.T, F(body.TORSO_RADIUS), F(body.TORSO_BOTTOM),
-                                             F(body.TORSO_TOP))
+    t_hip = cast(bodycast.ray_sphere, origin - hip, target - origin, F(body.LEG_RADIUS))
+    t_torso = cast(bodycast.ray_vertical_cylinder, origin, target - origin, F(body.TORSO_RADIUS),
+                   F(body.TORSO_BOTTOM), F(body.TORSO_TOP))
     assert np.isfinite(t_hip).all() and (t_torso <= t_hip).all()
