@@ -24,7 +24,7 @@ from pipeline.types import CameraFrame, DepthFrame
 
 from . import body, bodycast
 from .base import Periodic
-from .scene import LEG_GROUP, TORSO_GROUP, Scene
+from .scene import LEG_GROUP, ROBOT_GROUP, STATIC_GROUP, TORSO_GROUP, Scene
 
 MUJOCO_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])  # MuJoCo camera axes (x right, y up, z back) -> optical
 NEAR_CLIP, FAR_CLIP = 0.05, 200.0  # m, the GL clipping planes
@@ -78,10 +78,15 @@ class GLRenderer:
     segmentation together; colour images take a second pass in a scene of their own, so neither pass ever switches
     render state (which costs far more than a pass under Mesa). Colour and depth without segmentation take the
     colour pass alone. ``people=False`` draws the world without the people.
+
+    ``fixed=True`` is for a camera that never moves (a wall camera): the world that never moves (floor, walls,
+    obstacles) is drawn once per camera and kept, and each render draws the robot alone, reads back only the pixels
+    its box covers and keeps those as near as the kept world's or nearer, as GL's depth test would have. That costs a quarter
+    of drawing the whole view under Mesa, and gives the same image; it gives depth and colour, not segmentation.
     """
 
     def __init__(self, scene: Scene, intrinsics: Intrinsics, rgb: bool = False, people: bool = True,
-                 range_max: float = np.inf):
+                 range_max: float = np.inf, fixed: bool = False):
         self.backend = os.environ.get("MUJOCO_GL", "glfw")
         self.scene = scene
         self.intrinsics = intrinsics
@@ -94,6 +99,7 @@ class GLRenderer:
         self.people = people
         self.rgb = rgb
         self.range_max = range_max  # nothing wholly farther than this (z-depth) is drawn
+        self.fixed = fixed
         self.camera = mujoco.MjvCamera()
         self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
         self.mjr = None
@@ -131,6 +137,7 @@ class GLRenderer:
                 sc.flags[flag] = False
         self.ids.flags[mujoco.mjtRndFlag.mjRND_SEGMENT] = True
         self.ids.flags[mujoco.mjtRndFlag.mjRND_IDCOLOR] = True
+        self._static = {}  # a fixed camera's world without the robot: its colour and depth buffers, by camera
 
     def __del__(self):
         # GL object names belong to a context: the MjrContext must be freed with its own context current, or it
@@ -191,6 +198,11 @@ class GLRenderer:
             self.scene.model.geom_rgba[hidden, 3] = alpha
 
     def _render(self, camera: str, depth: bool, segmentation: bool, rgb: bool) -> dict:
+        if self.fixed:
+            if segmentation:
+                raise ValueError("a fixed camera's renderer gives depth and colour, not segmentation")
+            out = self._over_static(camera, rgb)
+            return out if depth else {"rgb": out["rgb"]}
         out = {}
         if rgb:
             if self.colour is None:
@@ -204,13 +216,7 @@ class GLRenderer:
             mujoco.mjr_readPixels(self._seg if segmentation else None, self._depth if depth else None, self.rect,
                                   self.mjr)
         if depth:
-            # OpenGL's depth buffer b in [0, 1] is 1/z mapped from [1/near, 1/far]:
-            # z = near far / (far - b (far - near)); b = 1 where nothing was drawn
-            m = self.scene.model
-            near, far = m.vis.map.znear * m.stat.extent, m.vis.map.zfar * m.stat.extent
-            b = self._depth[::-1].astype(np.float64)
-            z = near * far / (far - b * (far - near))
-            out["depth"] = np.where(b < 1.0, z, np.inf).astype(np.float32)
+            out["depth"] = self._z(self._depth[::-1])
         if segmentation:
             code = self._seg[::-1].astype(np.int64)
             segid = code[..., 0] + (code[..., 1] << 8) + (code[..., 2] << 16)  # 0: background, k + 1: geom k
@@ -222,29 +228,123 @@ class GLRenderer:
             out["geom"] = lookup[np.minimum(segid, self.ids.ngeom)]
         return out
 
+    def _z(self, b: np.ndarray) -> np.ndarray:
+        """z-depth in metres (inf where nothing was drawn) of OpenGL depth buffer values b in [0, 1], which are 1/z
+        mapped from [1/near, 1/far]: z = near far / (far - b (far - near)); b = 1 where nothing was drawn."""
+        m = self.scene.model
+        near, far = m.vis.map.znear * m.stat.extent, m.vis.map.zfar * m.stat.extent
+        b = b.astype(np.float64)
+        return np.where(b < 1.0, near * far / (far - b * (far - near)), np.inf).astype(np.float32)
+
+    def _over_static(self, camera: str, rgb: bool) -> dict:
+        """A fixed camera's depth and colour: the world without the robot as drawn once, and the robot drawn over
+        it."""
+        scene, groups = self.colour if rgb else self.ids, self.option.geomgroup
+        if camera not in self._static:
+            groups[ROBOT_GROUP] = 0
+            self._draw(scene, camera)
+            groups[ROBOT_GROUP] = 1
+            image = np.zeros((*self.shape, 3), np.uint8)
+            mujoco.mjr_readPixels(image if rgb else None, self._depth, self.rect, self.mjr)
+            buffer = self._depth[::-1].copy()  # GL's rows run bottom-up
+            self._static[camera] = image[::-1].copy(), buffer, self._z(buffer)
+        static_image, static_buffer, static_z = self._static[camera]
+        out = {"depth": static_z.copy(), "rgb": static_image.copy() if rgb else None}
+        box = robot_box(self.scene, camera, self.intrinsics)
+        if box is not None:
+            u0, v0, u1, v1 = box
+            groups[STATIC_GROUP] = 0
+            self._draw(scene, camera)
+            groups[STATIC_GROUP] = 1
+            image = np.zeros((v1 - v0, u1 - u0, 3), np.uint8)
+            buffer = np.empty((v1 - v0, u1 - u0), np.float32)
+            mujoco.mjr_readPixels(image if rgb else None, buffer,
+                                  mujoco.MjrRect(u0, self.shape[0] - v1, u1 - u0, v1 - v0), self.mjr)
+            image, buffer = image[::-1], buffer[::-1]
+            # GL's depth test passes a pixel as near as the one drawn (MuJoCo's LEQUAL), and the robot came after the
+            # walls and floor, so it wins their ties
+            nearer = (buffer < 1.0) & (buffer <= static_buffer[v0:v1, u0:u1])
+            out["depth"][v0:v1, u0:u1][nearer] = self._z(buffer[nearer])
+            if rgb:
+                out["rgb"][v0:v1, u0:u1][nearer] = image[nearer]
+        return out
+
+
+def robot_box(scene: Scene, camera: str, intrinsics: Intrinsics) -> tuple[int, int, int, int] | None:
+    """The pixels [u0, u1) x [v0, v1) the robot can cover in ``camera``: round the projections of its geoms'
+    bounding boxes, a pixel wider each side (the whole image when part of a box lies behind the camera); None where
+    it lies outside the view."""
+    m, d = scene.model, scene.data
+    geoms = np.flatnonzero(m.geom_bodyid == scene.robot_body)
+    unit = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
+    aabb = m.geom_aabb[geoms]  # centre and half sizes in each geom's frame
+    local = aabb[:, None, :3] + unit[None] * aabb[:, None, 3:]
+    corners = (d.geom_xpos[geoms][:, None] + np.einsum("nij,nkj->nki", d.geom_xmat[geoms].reshape(-1, 3, 3), local))
+    origin, rot = camera_pose(scene, camera)
+    c = ((corners - origin) @ rot).reshape(-1, 3)
+    k = intrinsics
+    if (c[:, 2] <= NEAR_CLIP).all():
+        return None
+    if (c[:, 2] <= NEAR_CLIP).any():
+        return 0, 0, k.width, k.height
+    uv = k.project(c)
+    u0, v0 = np.maximum(np.floor(uv.min(axis=0)).astype(int) - 1, 0)
+    u1, v1 = np.minimum(np.ceil(uv.max(axis=0)).astype(int) + 1, [k.width, k.height])
+    return (int(u0), int(v0), int(u1), int(v1)) if u0 < u1 and v0 < v1 else None
+
 
 class RaycastRenderer:
-    """The fallback without OpenGL: one ray per pixel from the camera, flat colours shaded by the surface angle."""
+    """The fallback without OpenGL: one ray per pixel from the camera, flat colours shaded by the surface angle.
+
+    ``fixed=True``, for a camera that never moves, casts the world that never moves once and after that only the
+    rays of the pixels the robot can cover, against the robot, as ``GLRenderer`` draws it."""
 
     backend = "raycast"
 
-    def __init__(self, scene: Scene, intrinsics: Intrinsics, exclude_body: int = -1, people: bool = True):
+    def __init__(self, scene: Scene, intrinsics: Intrinsics, exclude_body: int = -1, people: bool = True,
+                 fixed: bool = False):
         self.scene = scene
+        self.intrinsics = intrinsics
         self.exclude_body = exclude_body
         self.groups = np.ones(6, np.uint8)  # MuJoCo's include mask over geom groups
         self.groups[TORSO_GROUP:LEG_GROUP + 1] = people
+        self.fixed = fixed
+        self._static = {}  # a fixed camera's casts without the robot (geom, distance, normal), by camera
         dirs = intrinsics.pixel_directions().reshape(-1, 3)
         self.z_per_metre = 1.0 / np.linalg.norm(dirs, axis=1)  # z-depth per metre along a pixel's ray
         self.unit = dirs * self.z_per_metre[:, None]
         self.shape = (intrinsics.height, intrinsics.width)
 
-    def render(self, camera: str, depth: bool = True, segmentation: bool = True, rgb: bool = False) -> dict:
-        m, d = self.scene.model, self.scene.data
-        origin, rot = camera_pose(self.scene, camera)
-        vec = self.unit @ rot.T
+    def _cast(self, origin: np.ndarray, vec: np.ndarray, groups: np.ndarray):
+        """Geom, distance (-1: no hit) and normal [n, 3] of each ray."""
         n = len(vec)
         geom, dist, normal = np.zeros(n, np.int32), np.zeros(n), np.zeros(3 * n)
-        mujoco.mj_multiRay(m, d, origin, vec.ravel(), self.groups, 1, self.exclude_body, geom, dist, normal, n, 1e4)
+        mujoco.mj_multiRay(self.scene.model, self.scene.data, origin, vec.ravel(), groups, 1, self.exclude_body, geom,
+                           dist, normal, n, 1e4)
+        return geom, dist, normal.reshape(-1, 3)
+
+    def _over_static(self, camera: str, origin: np.ndarray, vec: np.ndarray):
+        """A fixed camera's casts: the world without the robot as cast once, the robot's where it is nearer."""
+        if camera not in self._static:
+            self._static[camera] = self._cast(origin, vec, np.where(np.arange(6) == ROBOT_GROUP, 0, self.groups))
+        geom, dist, normal = (a.copy() for a in self._static[camera])
+        box = robot_box(self.scene, camera, self.intrinsics)
+        if box is not None:
+            u0, v0, u1, v1 = box
+            rows = (np.arange(v0, v1)[:, None] * self.shape[1] + np.arange(u0, u1)).ravel()
+            robot = np.zeros(6, np.uint8)
+            robot[ROBOT_GROUP] = 1
+            g, r, nr = self._cast(origin, vec[rows], robot)
+            nearer = (r >= 0) & ((r < dist[rows]) | (dist[rows] < 0))  # a tie to the geom first in the model, as one cast
+            geom[rows[nearer]], dist[rows[nearer]], normal[rows[nearer]] = g[nearer], r[nearer], nr[nearer]
+        return geom, dist, normal
+
+    def render(self, camera: str, depth: bool = True, segmentation: bool = True, rgb: bool = False) -> dict:
+        m = self.scene.model
+        origin, rot = camera_pose(self.scene, camera)
+        vec = self.unit @ rot.T
+        geom, dist, normal = (self._over_static(camera, origin, vec) if self.fixed
+                              else self._cast(origin, vec, self.groups))
         hit = dist >= 0
         out = {}
         if depth:
@@ -252,7 +352,7 @@ class RaycastRenderer:
         if segmentation:
             out["geom"] = np.where(hit, geom, -1).reshape(self.shape)
         if rgb:
-            colour = shade(m.geom_rgba[np.maximum(geom, 0), :3], normal.reshape(-1, 3), vec)
+            colour = shade(m.geom_rgba[np.maximum(geom, 0), :3], normal, vec)
             out["rgb"] = np.where(hit[:, None], colour, 0).astype(np.uint8).reshape(*self.shape, 3)
         return out
 
@@ -265,14 +365,14 @@ def shade(colour: np.ndarray, normal: np.ndarray, view: np.ndarray) -> np.ndarra
 
 
 def make_renderer(scene: Scene, intrinsics: Intrinsics, exclude_body: int = -1, rgb: bool = False,
-                  people: bool = True, range_max: float = np.inf):
+                  people: bool = True, range_max: float = np.inf, fixed: bool = False):
     """MuJoCo's GL renderer where a context can be made, else ray casting."""
     if os.environ.get("MUJOCO_GL", "") not in ("disable", "disabled", "off", "false", "0"):
         try:
-            return GLRenderer(scene, intrinsics, rgb, people, range_max)
+            return GLRenderer(scene, intrinsics, rgb, people, range_max, fixed)
         except Exception:  # no usable GL context: fall back, and the backend name says so
             pass
-    return RaycastRenderer(scene, intrinsics, exclude_body, people)
+    return RaycastRenderer(scene, intrinsics, exclude_body, people, fixed)
 
 
 def kinect_noise(depth: np.ndarray, rng: np.random.Generator, camera: DepthCamera) -> np.ndarray:
@@ -408,9 +508,10 @@ class WallCamera(CameraSensor):
     """A fixed camera: RGB and segmentation, and for every person in view the visible box and visible fraction. Made
     as ``WallCamera(scene=..., **params)``.
 
-    The renderer draws the world without the people (walls, obstacles, the robot); the people are then ray-cast
-    exactly (sensors/bodycast.py) on the pixels their boxes cover and drawn in where they are nearer than the world.
-    That casting gives every person's unoccluded silhouette as well, and costs a fraction of drawing them under Mesa.
+    The renderer draws the world without the people (walls, obstacles, the robot; the walls once, as the camera is
+    fixed); the people are then ray-cast exactly (sensors/bodycast.py) on the pixels their boxes cover and drawn in
+    where they are nearer than the world. That casting gives every person's unoccluded silhouette as well, and costs
+    a fraction of drawing them under Mesa.
     """
 
     name: str = param(REQUIRED, "the camera's frame name", kind="str")
@@ -427,7 +528,7 @@ class WallCamera(CameraSensor):
     def __post_init__(self):
         self.intrinsics = Intrinsics(self.width, self.height, self.fovy_deg)
         self.period = 1.0 / self.rate
-        self.renderer = make_renderer(self.scene, self.intrinsics, rgb=self.rgb, people=False)
+        self.renderer = make_renderer(self.scene, self.intrinsics, rgb=self.rgb, people=False, fixed=True)
 
     @property
     def backend(self) -> str:

@@ -31,9 +31,10 @@ PARKED_Z = -50.0
 # airport scan about 0.6 ms. Memory and the model's making follow the persons present, not max_agents
 INITIAL_CAPACITY = 32
 PARTS = ("torso", "head", "legs")
-# MuJoCo geom groups, so that a ray cast skips the parts a ray at its height cannot meet (a renderer must turn all
-# groups on: MuJoCo shows groups 0-2 by default)
-STATIC_GROUP, TORSO_GROUP, HEAD_GROUP, LEG_GROUP = 0, 1, 2, 3
+# MuJoCo geom groups, so that a ray cast skips the parts a ray at its height cannot meet, and a fixed camera draws
+# the world that never moves apart from the robot (a renderer must turn all groups on: MuJoCo shows groups 0-2 by
+# default)
+STATIC_GROUP, TORSO_GROUP, HEAD_GROUP, LEG_GROUP, ROBOT_GROUP = 0, 1, 2, 3, 4
 
 
 def parts_at(height: float) -> set[str]:
@@ -136,11 +137,11 @@ class Scene:
     {"".join(camera_xml(c) for c in wall_cameras)}
     <body name="robot" mocap="true" pos="0 0 0">
       <geom type="cylinder" size="{robot_radius} {ROBOT_BASE_HEIGHT / 2}" pos="0 0 {ROBOT_BASE_HEIGHT / 2}"
-            rgba=".85 .85 .88 1"/>
+            group="{ROBOT_GROUP}" rgba=".85 .85 .88 1"/>
       <geom type="box" size="{ROBOT_BODY_HALF[0]} {ROBOT_BODY_HALF[1]} {(ROBOT_HEAD_BOTTOM - ROBOT_BASE_HEIGHT) / 2}"
-            pos="0 0 {(ROBOT_HEAD_BOTTOM + ROBOT_BASE_HEIGHT) / 2}" rgba=".2 .3 .8 1"/>
+            pos="0 0 {(ROBOT_HEAD_BOTTOM + ROBOT_BASE_HEIGHT) / 2}" group="{ROBOT_GROUP}" rgba=".2 .3 .8 1"/>
       <geom type="box" size="{ROBOT_HEAD_HALF[0]} {ROBOT_HEAD_HALF[1]} {(ROBOT_HEIGHT - ROBOT_HEAD_BOTTOM) / 2}"
-            pos="0 0 {(ROBOT_HEIGHT + ROBOT_HEAD_BOTTOM) / 2}" rgba=".85 .85 .88 1"/>
+            pos="0 0 {(ROBOT_HEIGHT + ROBOT_HEAD_BOTTOM) / 2}" group="{ROBOT_GROUP}" rgba=".85 .85 .88 1"/>
       {"".join(camera_xml(c) for c in robot_cameras)}
     </body>
     {persons}

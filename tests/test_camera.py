@@ -269,3 +269,30 @@ def test_a_renderer_freed_leaves_the_others_images_alone():
     del first
     gc.collect()
     np.testing.assert_array_equal(second.render(0.0).rgb, image)
+
+
+@pytest.mark.parametrize("renderer", ["gl", "raycast"])
+def test_a_fixed_camera_draws_the_robot_over_the_world_it_drew_once(renderer, monkeypatch):
+    # a level wall camera 0.5 m up looking +x at the wall 4.95 m away; the robot (base radius 0.425, 0.95 m high)
+    # drives into view: the pixels round the optical axis see the base's front at (3, 0), 3 - 0.425 away (GL draws
+    # the cylinder as 16 flat sides, whose faces lie 0.425 cos(pi / 16) from the axis); then it leaves the view and
+    # the wall shows again. Each image is the one drawn whole.
+    if renderer == "raycast":
+        monkeypatch.setenv("MUJOCO_GL", "disable")
+    cam = dict(WALL_CAM, position=[0.0, 0.0, 0.5], pitch=0.0, rgb=True)
+    scene = Scene(np.array(WALL_X, float), 0.425, 1, wall_cameras=[cam])
+    camera = WallCamera(scene=scene, **cam)
+    assert camera.renderer.fixed and (camera.backend == "raycast") == (renderer == "raycast")
+    whole = (GLRenderer(scene, camera.intrinsics, rgb=True, people=False) if isinstance(camera.renderer, GLRenderer)
+             else RaycastRenderer(scene, camera.intrinsics, people=False))
+    for x, y, seen in ((-20.0, 0.0, False), (3.0, 0.0, True), (3.0, 0.7, True), (-3.0, 0.0, False)):
+        scene.sync(np.array([x, y, 0.3]), np.zeros(0, np.int64), np.zeros((0, 2)))
+        got = camera.renderer.render(cam["name"], depth=True, segmentation=False, rgb=True)
+        drawn = whole.render(cam["name"], depth=True, segmentation=False, rgb=True)
+        np.testing.assert_array_equal(got["depth"], drawn["depth"])
+        np.testing.assert_array_equal(got["rgb"], drawn["rgb"])
+        centre = got["depth"][119:121, 159:161]  # the four pixels round the optical axis
+        if seen and y == 0.0:
+            assert (centre >= 3.0 - 0.425 - 1e-3).all() and (centre <= 3.0 - 0.425 * np.cos(np.pi / 16) + 1e-3).all()
+        elif not seen:
+            np.testing.assert_allclose(centre, 4.95, atol=2e-3)
