@@ -60,9 +60,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pipeline.compiled import kernel
+from pipeline.compiled import by_label, kernel
 
-from .tables import ExactSum, Slots, grown
+from .tables import ExactSum
 
 __all__ = ["GroupFrame", "GroupMetrics"]
 
@@ -89,18 +89,8 @@ class GroupFrame:
 
 
 def _i(a) -> np.ndarray:
-    return np.asarray(a, np.int64).reshape(-1)
-
-
-def _lookup(keys: np.ndarray, values: np.ndarray, query: np.ndarray, missing) -> tuple[np.ndarray, np.ndarray]:
-    """The value of each of ``query`` in the map ``keys`` (unique) -> ``values``, ``missing`` where absent; and
-    whether it was found."""
-    if keys.size == 0:
-        return np.full(query.size, missing, values.dtype), np.zeros(query.size, bool)
-    order = np.argsort(keys)
-    at = np.minimum(np.searchsorted(keys[order], query), keys.size - 1)
-    found = keys[order][at] == query
-    return np.where(found, values[order][at], missing), found
+    """``a`` as a contiguous int64 vector: the one layout the kernels are compiled for."""
+    return np.ascontiguousarray(a, np.int64).reshape(-1)
 
 
 def _ratio(num: int, den: int) -> float | None:
@@ -111,24 +101,6 @@ def _f1(p: float | None, r: float | None) -> float | None:
     if p is None or r is None:
         return None
     return 0.0 if p + r == 0 else 2 * p * r / (p + r)
-
-
-def _clusters(labels: np.ndarray, alone: np.ndarray) -> np.ndarray:
-    """Cluster numbers 0.. of elements labelled ``labels``, each element where ``alone`` a cluster of its own."""
-    _, inv = np.unique(labels[~alone], return_inverse=True)
-    out = np.empty(labels.size, np.int64)
-    out[~alone] = inv.reshape(-1)
-    out[alone] = (inv.max() + 1 if inv.size else 0) + np.arange(np.count_nonzero(alone))
-    return out
-
-
-def _mitre(key: np.ndarray, response: np.ndarray) -> tuple[int, int]:
-    """G-MITRE's numerator and denominator of R(key -> response), partitions as cluster numbers per element."""
-    k_size = np.bincount(key)
-    in_group = k_size[key] >= 2
-    lone = ~in_group & (np.bincount(response)[response] == 1)
-    spans = np.unique(key[in_group] * (int(response.max()) + 1) + response[in_group]).size
-    return int(in_group.sum()) - spans + int(lone.sum()), key.size - int((k_size >= 2).sum())
 
 
 class GroupMetrics:
@@ -144,13 +116,12 @@ class GroupMetrics:
             raise ValueError("bins must be >= 1")
         self.relation_range, self.relation_threshold, self.bins = relation_range, float(relation_threshold), int(bins)
         self._frames = self._true = self._detected = self._tp23 = self._tp1 = 0
-        self._mitre = np.zeros(4, np.int64)  # recall numerator, denominator; precision numerator, denominator
+        self._mitre = [0, 0, 0, 0]  # recall numerator, denominator; precision numerator, denominator
         self._pairs = self._pos = self._related = self._related_pos = 0
         self._hist = np.zeros((2, self.bins), np.int64)  # [label, bin]
         self._brier = ExactSum()
         self._fp = self._ids = 0
-        self._groups = Slots()  # true group ids ever matched
-        self._last = _ints()  # the tracked group each was last matched to
+        self._last: dict[int, int] = {}  # true group id ever matched -> the tracked group it was last matched to
 
     def update(self, frame: GroupFrame) -> None:
         """Score one cycle."""
@@ -158,89 +129,51 @@ class GroupMetrics:
         n = gt_id.size
         pos = np.asarray(frame.gt_position, np.float64).reshape(n, 2)
         m_track = _i(frame.matched_track)
-        m_row, found = _lookup(gt_id, np.arange(n), _i(frame.matched_gt), -1)
-        if not found.all():
+        m_row = _rows(gt_id, _i(frame.matched_gt))
+        if (m_row < 0).any():
             raise ValueError("matched_gt must be counted persons of the frame")
         self._frames += 1
-
-        # Tracked groups: member rows to person rows (-1: a false positive track), excused members dropped.
-        g_id, g_track = _i(frame.group_id), _i(frame.group_track)
-        if np.unique(g_track).size != g_track.size:
-            raise ValueError("a track can be a member of one tracked group only")
-        keep = ~np.isin(g_track, _i(frame.excused_track))
-        member, _ = _lookup(m_track, m_row, g_track[keep], -1)
-        det_ids, det = np.unique(g_id[keep], return_inverse=True)
-        det = det.reshape(-1)
-        det_size = np.bincount(det, minlength=det_ids.size)
-
-        # True groups: dense numbers of the counted persons' groups.
-        grouped = gt_group >= 0
-        true_ids, true = np.unique(gt_group[grouped], return_inverse=True)
-        true_of = np.full(n, -1, np.int64)
-        true_of[grouped] = true.reshape(-1)
-        true_size = np.bincount(true_of[grouped], minlength=true_ids.size)
-
-        self._match_groups(member, det, det_ids, det_size, true_of, true_ids, true_size)
-        if n:
-            response = np.full(n, -1, np.int64)
-            response[member[member >= 0]] = det[member >= 0]
-            key, response = _clusters(true_of, ~grouped), _clusters(response, response < 0)
-            self._mitre += (*_mitre(key, response), *_mitre(response, key))
+        # The tracked groups as the persons see them (excused members dropped, false positive tracks in the sizes
+        # only), and the true groups as dense numbers of the counted persons' groups.
+        response, det_ids, det_size = _response(n, m_row, m_track, _i(frame.excused_track), _i(frame.group_id),
+                                                _i(frame.group_track))
+        true_of, true_ids, true_size = _numbered(gt_group, gt_group >= 0)
+        self._match_groups(true_of, true_ids, true_size, response, det_ids, det_size)
+        self._mitre = [total + part for total, part in zip(self._mitre, (*_mitre(true_of, response),
+                                                                          *_mitre(response, true_of)))]
         self._relations(frame, pos, gt_group, m_row, m_track)
 
-    def _match_groups(self, member, det, det_ids, det_size, true_of, true_ids, true_size) -> None:
+    def _match_groups(self, true_of, true_ids, true_size, response, det_ids, det_size) -> None:
         """Metrics 1 and 4: the groups of 2+ members of both sides, matched by their common persons."""
-        nt = max(true_ids.size, 1)
-        t = true_of[member[member >= 0]]
-        d = det[member >= 0][t >= 0]
-        both, common = np.unique(d * nt + t[t >= 0], return_counts=True)
-        d, t = both // nt, both % nt
-        big = np.maximum(det_size[d], true_size[t])
-        ok = (det_size[d] >= 2) & (true_size[t] >= 2)
-        match = ok & (3 * common >= 2 * big)
-        n_true, n_det, tp = int((true_size >= 2).sum()), int((det_size >= 2).sum()), int(match.sum())
+        n_true, n_det, tp, tp1, matched_true, matched_det = _group_matches(true_of, true_size, response, det_size)
         self._true += n_true
         self._detected += n_det
         self._tp23 += tp
-        self._tp1 += int((ok & (common == big)).sum())
+        self._tp1 += tp1
         self._fp += n_det - tp
-
-        # ID switches: a true group matched to another tracked group id than the one it was last matched to.
-        gid, tid = true_ids[t[match]], det_ids[d[match]]
-        known = len(self._groups)
-        slot = self._groups(gid)
-        self._last = grown(self._last, len(self._groups))
-        seen = slot < known
-        self._ids += int((self._last[slot[seen]] != tid[seen]).sum())
-        self._last[slot] = tid
+        # ID switches: a true group matched to another tracked group id than the one it was last matched to (a true
+        # group matches one tracked group a frame at most, so the order of the matches does not matter).
+        for group, tracked in zip(true_ids[matched_true].tolist(), det_ids[matched_det].tolist()):
+            self._ids += self._last.get(group, tracked) != tracked
+            self._last[group] = tracked
 
     def _relations(self, frame: GroupFrame, pos, gt_group, m_row, m_track) -> None:
         """Metric 3: the pairs of matched tracks within range, scored by their relation's strength."""
         i, j = _close_pairs(pos, m_row, self.relation_range)
         if i.size == 0:
             return
-        a, b = m_row[i], m_row[j]
-        label = (gt_group[a] >= 0) & (gt_group[a] == gt_group[b])
         ra, rb = _i(frame.relation_a), _i(frame.relation_b)
-        strength = np.asarray(frame.relation_strength, np.float64).reshape(-1)
+        strength = np.ascontiguousarray(frame.relation_strength, np.float64).reshape(-1)
         if not ra.size == rb.size == strength.size:
             raise ValueError("relation_a, relation_b and relation_strength must have one entry per relation")
-        # Pairs of tracks as keys min * K + max over the dense numbers of the K track ids in play.
-        ids, dense = np.unique(np.concatenate([m_track, ra, rb]), return_inverse=True)
-        t, da, db = np.split(dense.reshape(-1), [m_track.size, m_track.size + ra.size])
-        rel_key = np.minimum(da, db) * ids.size + np.maximum(da, db)
-        if np.unique(rel_key).size != rel_key.size:
-            raise ValueError("a pair of tracks has more than one relation")
-        ti, tj = t[i], t[j]
-        score, _ = _lookup(rel_key, strength, np.minimum(ti, tj) * ids.size + np.maximum(ti, tj), 0.0)
-        related = score >= self.relation_threshold
+        score = _relation_strengths(m_track, i, j, ra, rb, strength)
+        positives, related, related_pos, squared_error = _tally_pairs(score, gt_group[m_row], i, j,
+                                                                      self.relation_threshold, self._hist)
         self._pairs += i.size
-        self._pos += int(label.sum())
-        self._related += int(related.sum())
-        self._related_pos += int((related & label).sum())
-        bin_ = np.minimum((np.clip(score, 0.0, 1.0) * self.bins).astype(np.int64), self.bins - 1)
-        self._hist += np.bincount(label * self.bins + bin_, minlength=2 * self.bins).reshape(2, self.bins)
-        self._brier.add((score - label) ** 2)
+        self._pos += positives
+        self._related += related
+        self._related_pos += related_pos
+        self._brier.add(squared_error)
 
     def _auc(self) -> float | None:
         neg, pos = self._hist
@@ -268,7 +201,7 @@ class GroupMetrics:
             p, r = _ratio(tp, self._detected), _ratio(tp, self._true)
             return {"tp": tp, "precision": p, "recall": r, "f1": _f1(p, r)}
 
-        rn, rd, pn, pd = self._mitre.tolist()
+        rn, rd, pn, pd = self._mitre
         mp, mr = _ratio(pn, pd), _ratio(rn, rd)
         pp, pr = _ratio(self._related_pos, self._related), _ratio(self._related_pos, self._pos)
         fn = self._true - self._tp23
@@ -292,11 +225,213 @@ def _close_pairs(pos, rows, reach):
     other, in ``np.triu_indices``' order."""
     n = len(rows)
     first, second = np.empty(n * (n - 1) // 2, np.int64), np.empty(n * (n - 1) // 2, np.int64)
+    # a squared distance past this is past ``reach`` whatever the rounding (the relative 1e-9 covers the squares',
+    # the absolute 1e-300 their underflow): most pairs are, and cost no hypot
+    beyond = reach * reach * (1.0 + 1e-9) + 1e-300
     m = 0
     for i in range(n):
         for j in range(i + 1, n):
             a, b = rows[i], rows[j]
-            if math.hypot(pos[a, 0] - pos[b, 0], pos[a, 1] - pos[b, 1]) <= reach:
+            dx, dy = pos[a, 0] - pos[b, 0], pos[a, 1] - pos[b, 1]
+            if not dx * dx + dy * dy > beyond and math.hypot(dx, dy) <= reach:
                 first[m], second[m] = i, j
                 m += 1
     return first[:m], second[:m]
+
+
+# The frame's ids (persons, tracks, groups) are arbitrary int64s: the kernels below find them in hash tables, a few
+# probes an id whatever its value, where numpy's sorting calls cost their overhead many times over at a crowd's size.
+
+
+@kernel
+def _empty_table(n):
+    """Room for ``n`` keys (-1: an empty slot), at least twice as many slots, a power of two."""
+    size = 8
+    while size < 2 * n:
+        size *= 2
+    return np.full(size, -1, np.int64)
+
+
+@kernel
+def _slot(table, first, second, a, b):
+    """The slot of ``table`` (its entries index ``first`` and ``second``) holding the key (a, b), else the empty one
+    where it goes: linear probing from the key's Fibonacci hash (the high bits of a key times 2^64 / golden ratio).
+    A key of one id is (id, id)."""
+    mask = len(table) - 1
+    h = (np.uint64(a) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(b)) * np.uint64(0x9E3779B97F4A7C15)
+    s = np.int64(h >> np.uint64(32)) & mask
+    while table[s] >= 0 and (first[table[s]] != a or second[table[s]] != b):
+        s = (s + 1) & mask
+    return s
+
+
+@kernel
+def _rows(keys, query):
+    """The index in ``keys`` of each of ``query``, -1 where absent (the first where a key repeats)."""
+    table = _empty_table(len(keys))
+    for k in range(len(keys)):
+        s = _slot(table, keys, keys, keys[k], keys[k])
+        if table[s] < 0:
+            table[s] = k
+    out = np.empty(len(query), np.int64)
+    for q in range(len(query)):
+        out[q] = table[_slot(table, keys, keys, query[q], query[q])]
+    return out
+
+
+@kernel
+def _numbered(values, counted):
+    """Dense numbers 0.. of the ``values`` where ``counted``, in order of first appearance (-1 elsewhere); the value
+    and the count of each number."""
+    table = _empty_table(len(values))
+    label = np.full(len(values), -1, np.int64)
+    distinct, count = np.empty(len(values), np.int64), np.zeros(len(values), np.int64)
+    k = 0
+    for e in range(len(values)):
+        if counted[e]:
+            s = _slot(table, distinct, distinct, values[e], values[e])
+            if table[s] < 0:
+                table[s] = k
+                distinct[k] = values[e]
+                k += 1
+            label[e] = table[s]
+            count[label[e]] += 1
+    return label, distinct[:k], count[:k]
+
+
+@kernel
+def _response(n, m_row, m_track, excused, group_id, group_track):
+    """The tracked groups as the ``n`` persons see them: each person's group (dense numbers 0.., -1 none), and each
+    group's id and size. A member track matched to a person (``m_track[k]`` to row ``m_row[k]``) is that person, an
+    ``excused`` one is dropped, any other (a false positive) counts in its group's size only."""
+    first = _rows(group_track, group_track)
+    excused_at = _rows(excused, group_track)
+    kept = np.empty(len(group_track), np.bool_)
+    for k in range(len(group_track)):
+        if first[k] != k:
+            raise ValueError("a track can be a member of one tracked group only")
+        kept[k] = excused_at[k] < 0
+    group, ids, size = _numbered(group_id, kept)
+    match = _rows(m_track, group_track)
+    response = np.full(n, -1, np.int64)
+    for k in range(len(group_track)):
+        if kept[k] and match[k] >= 0:
+            response[m_row[match[k]]] = group[k]
+    return response, ids, size
+
+
+@kernel
+def _group_matches(true_of, true_size, response, det_size):
+    """Metric 1's counts: the true and the tracked groups of two or more members, the matches at T = 2/3
+    (3 |G n D| >= 2 max(|G|, |D|)) and at T = 1, and the matched pairs (true, tracked group number). ``true_of`` and
+    ``response`` are each person's true and tracked group (-1: none); the sizes count all members (a tracked
+    group's false positives too). |G n D| is counted per tracked group over its persons, each true group met in it
+    once."""
+    start, order = by_label(response, len(det_size))
+    common, met_in, met = np.zeros(len(true_size), np.int64), np.full(len(true_size), -1, np.int64), np.empty(
+        len(order), np.int64)
+    matched_true, matched_det = np.empty(len(det_size), np.int64), np.empty(len(det_size), np.int64)
+    n_true = n_det = tp = exact = matches = 0
+    for t in range(len(true_size)):
+        if true_size[t] >= 2:
+            n_true += 1
+    for d in range(len(det_size)):
+        if det_size[d] < 2:
+            continue
+        n_det += 1
+        k = 0  # the true groups met in d: met[:k]
+        for p in range(start[d], start[d + 1]):
+            t = true_of[order[p]]
+            if t >= 0:
+                if met_in[t] != d:
+                    met_in[t], common[t], met[k] = d, 0, t
+                    k += 1
+                common[t] += 1
+        for q in range(k):
+            t = met[q]
+            big = max(det_size[d], true_size[t])
+            if true_size[t] >= 2:
+                if 3 * common[t] >= 2 * big:
+                    tp += 1
+                    matched_true[matches] = t
+                    matched_det[matches] = d
+                    matches += 1
+                if common[t] == big:
+                    exact += 1
+    return n_true, n_det, tp, exact, matched_true[:matches], matched_det[:matches]
+
+
+@kernel
+def _mitre(key, response):
+    """G-MITRE's numerator and denominator of R(key -> response), partitions as a cluster number 0.. per element,
+    -1 a cluster of its own: per key cluster S of 2+ elements |S| minus the response clusters S falls in, plus 1 per
+    element alone on both sides (its counterpart); the denominator is the elements less the key clusters of 2+."""
+    nk = nr = 0
+    for e in range(len(key)):
+        nk, nr = max(nk, key[e] + 1), max(nr, response[e] + 1)
+    start, order = by_label(key, nk)
+    r_size = np.zeros(nr, np.int64)
+    for r in response:
+        if r >= 0:
+            r_size[r] += 1
+    numerator = clusters = 0
+    for e in range(len(key)):
+        if (key[e] < 0 or start[key[e] + 1] - start[key[e]] == 1) and (response[e] < 0 or r_size[response[e]] == 1):
+            numerator += 1
+    met_in = np.full(nr, -1, np.int64)  # the key cluster in which each response cluster was last met
+    for c in range(nk):
+        if start[c + 1] - start[c] >= 2:
+            clusters += 1
+            numerator += start[c + 1] - start[c]
+            for p in range(start[c], start[c + 1]):
+                r = response[order[p]]
+                if r < 0 or met_in[r] != c:
+                    numerator -= 1
+                    if r >= 0:
+                        met_in[r] = c
+    return numerator, len(key) - clusters
+
+
+@kernel
+def _relation_strengths(track, i, j, rel_a, rel_b, strength):
+    """The strength of the relation between tracks ``track[i[p]]`` and ``track[j[p]]`` (given in either order), 0
+    where the relations lack it; a pair of tracks with more than one relation is a ``ValueError``."""
+    r = len(rel_a)
+    lo, hi, table = np.empty(r, np.int64), np.empty(r, np.int64), _empty_table(r)
+    for k in range(r):
+        lo[k], hi[k] = min(rel_a[k], rel_b[k]), max(rel_a[k], rel_b[k])
+        s = _slot(table, lo, hi, lo[k], hi[k])
+        if table[s] >= 0:
+            raise ValueError("a pair of tracks has more than one relation")
+        table[s] = k
+    out = np.zeros(len(i))
+    for p in range(len(i)):
+        a, b = track[i[p]], track[j[p]]
+        k = table[_slot(table, lo, hi, min(a, b), max(a, b))]
+        if k >= 0:
+            out[p] = strength[k]
+    return out
+
+
+@kernel
+def _tally_pairs(score, group, i, j, threshold, hist):
+    """The scored pairs of rows (``i[p]``, ``j[p]``) into ``hist`` [label, bin] (in place; bins uniform on [0, 1],
+    scores clipped to it), a pair positive (label 1) when both rows are in one true group (``group`` >= 0): how many
+    are positive, how many related (score >= ``threshold``), how many both, and each pair's squared error
+    (score - label)^2 for the Brier score."""
+    bins = hist.shape[1]
+    positives = related = related_pos = 0
+    squared_error = np.empty(len(score))
+    for p in range(len(score)):
+        s = score[p]
+        if math.isnan(s):
+            raise ValueError("relation strengths must not be NaN")
+        positive = 1 if group[i[p]] >= 0 and group[i[p]] == group[j[p]] else 0
+        positives += positive
+        if s >= threshold:
+            related += 1
+            related_pos += positive
+        hist[positive, min(int(min(max(s, 0.0), 1.0) * bins), bins - 1)] += 1
+        error = s - positive
+        squared_error[p] = error * error
+    return positives, related, related_pos, squared_error

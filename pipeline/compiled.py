@@ -16,7 +16,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["elementwise", "kernel"]
+__all__ = ["by_label", "elementwise", "kernel"]
 
 
 def kernel(fn):
@@ -98,3 +98,22 @@ def segment_sum(values, lo, n):
     if n <= 129:
         return values[lo] + _block(values, lo + 1, n - 1)
     return values[lo] + pairwise(values, lo + 1, n - 1)
+
+
+@kernel
+def by_label(labels, k):
+    """The elements of labels 0..k-1 (others, such as -1, left out) in order of label, then of element (a counting
+    sort): label c's are ``order[start[c]:start[c + 1]]``. For the clusters of a cycle, where numpy's argsort and
+    unique cost their call overhead many times over."""
+    start = np.zeros(k + 1, np.int64)
+    for c in labels:
+        if c >= 0:
+            start[c + 1] += 1
+    for c in range(k):
+        start[c + 1] += start[c]
+    order, fill = np.empty(start[k], np.int64), start[:k].copy()
+    for e in range(len(labels)):
+        if labels[e] >= 0:
+            order[fill[labels[e]]] = e
+            fill[labels[e]] += 1
+    return start, order

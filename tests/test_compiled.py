@@ -34,3 +34,12 @@ def test_above_128_values_the_halves_are_summed_apart():
     assert pairwise(values, 0, 128) == BIG + 112
     assert pairwise(values, 128, 128) == -BIG + 127
     assert pairwise(values, 0, 256) == 239.0 == values.sum()
+
+
+def test_by_label_is_a_counting_sort():
+    from pipeline.compiled import by_label
+
+    # labels 2, -1, 0, 2, 0 with k = 3: label 0 holds elements 2 and 4, label 1 none, label 2 elements 0 and 3;
+    # element 1 (-1) is left out
+    start, order = by_label(np.array([2, -1, 0, 2, 0]), 3)
+    assert start.tolist() == [0, 2, 2, 4] and order.tolist() == [2, 4, 0, 3]

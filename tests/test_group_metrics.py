@@ -254,3 +254,94 @@ def test_close_pairs_in_triangle_order_by_hand():
     i, j = _close_pairs(pos, np.array([3, 0, 2]), 3.0)
     assert i.tolist() == [0, 0] and j.tolist() == [1, 2]
     assert _close_pairs(pos, np.array([1]), 3.0)[0].size == 0
+
+
+def test_close_pairs_never_take_non_finite_positions():
+    from evaluation.groups import _close_pairs
+
+    # a NaN and an infinite position are never within range, of each other or of anyone; the two finite ones, 1 m
+    # apart, are
+    pos = np.array([[0.0, 0.0], [np.nan, 0.0], [np.inf, 0.0], [1.0, 0.0]])
+    i, j = _close_pairs(pos, np.arange(4), 3.0)
+    assert list(zip(i.tolist(), j.tolist())) == [(0, 3)]
+
+
+def test_hash_lookups_of_arbitrary_ids_by_hand():
+    from evaluation.groups import _numbered, _rows
+
+    # ids far apart and negative: -7 is at 0, 2**40 at 1, 5 at 2 and 3 (the first is found); 6 is absent
+    keys = np.array([-7, 2 ** 40, 5, 5])
+    assert _rows(keys, np.array([5, -7, 6, 2 ** 40])).tolist() == [2, 0, -1, 1]
+    assert _rows(keys[:0], np.array([1])).tolist() == [-1]
+    # numbers in order of first appearance among the counted: 9 (row 1) is 0, 4 is 1; row 0's 4 is not counted
+    label, distinct, count = _numbered(np.array([4, 9, 4, 9, 9]), np.array([False, True, True, True, True]))
+    assert label.tolist() == [-1, 0, 1, 0, 0] and distinct.tolist() == [9, 4] and count.tolist() == [3, 1]
+
+
+def test_tracked_groups_as_the_persons_see_them_by_hand():
+    from evaluation.groups import _response
+
+    # persons rows 0..3; CLEAR-MOT matched track 10 to row 2, 11 to row 0, 12 to row 3; track 13 was matched to an
+    # ignored person (excused), 14 to nobody. Group 50 = {10, 14}, group 70 = {11, 13, 12}.
+    response, ids, size = _response(4, np.array([2, 0, 3]), np.array([10, 11, 12]), np.array([13]),
+                                    np.array([50, 50, 70, 70, 70]), np.array([10, 14, 11, 13, 12]))
+    # 50 is number 0 (first seen), 70 number 1; 50 keeps its false positive 14 (size 2), 70 loses 13 (size 2);
+    # rows 2 -> 0, 0 and 3 -> 1, row 1 in none
+    assert ids.tolist() == [50, 70] and size.tolist() == [2, 2]
+    assert response.tolist() == [1, -1, 0, 1]
+    with pytest.raises(ValueError, match="one tracked group only"):
+        _response(1, np.array([0]), np.array([10]), np.zeros(0, np.int64), np.array([1, 2]), np.array([10, 10]))
+
+
+def test_group_matches_by_hand():
+    from evaluation.groups import _group_matches
+
+    # persons 0..6: true groups 0 = {0, 1, 2}, 1 = {3, 4}, 2 = {5} (one counted member), person 6 alone.
+    # tracked groups 0 = {0, 1} plus a false positive (size 3), 1 = {3, 4}, 2 = {2, 5} (size 2), 3 = {6} (size 1).
+    true_of, true_size = np.array([0, 0, 0, 1, 1, 2, -1]), np.array([3, 2, 1])
+    response, det_size = np.array([0, 0, 2, 1, 1, 2, 3]), np.array([3, 2, 2, 1])
+    n_true, n_det, tp, exact, matched_true, matched_det = _group_matches(true_of, true_size, response, det_size)
+    # groups of 2+: true 0 and 1; tracked 0, 1, 2. T = 2/3: (0, 0) 3 * 2 >= 2 * 3 yes; (1, 1) 3 * 2 >= 2 * 2 yes;
+    # tracked 2 meets true 0 once (3 < 6) and true 2 (size 1: left out). T = 1: only (1, 1) has |G n D| = max = 2.
+    assert (n_true, n_det, tp, exact) == (2, 3, 2, 1)
+    assert list(zip(matched_true.tolist(), matched_det.tolist())) == [(0, 0), (1, 1)]
+
+
+def test_mitre_kernel_on_the_first_worked_row():
+    from evaluation.groups import _mitre
+
+    # ROW1: key {1,2,3}, {4}, {5}; response {1,2}, {3,4}, {5} (person 5's group alone): as labels, -1 alone.
+    key, response = np.array([0, 0, 0, -1, -1]), np.array([0, 0, 1, 1, -1])
+    # R: {1,2,3} spans 2 response clusters: 3 - 2 = 1; 4 is alone in the key but not in the response: 0; 5 alone
+    # on both sides: 1. Denominator 5 - 1 = 4. P: {1,2} in one key cluster: 1; {3,4} spans 2: 0; 5: 1; over 5 - 2.
+    assert _mitre(key, response) == (2, 4)
+    assert _mitre(response, key) == (2, 3)
+    assert _mitre(np.zeros(0, np.int64), np.zeros(0, np.int64)) == (0, 0)
+
+
+def test_relation_strengths_either_order_missing_and_duplicate():
+    from evaluation.groups import _relation_strengths
+
+    # relations (7, 3) 0.8 and (3, 9) 0.4; the pairs asked for: tracks (3, 7), (9, 3), (7, 9) (none: 0)
+    track = np.array([3, 7, 9])
+    got = _relation_strengths(track, np.array([0, 2, 1]), np.array([1, 0, 2]), np.array([7, 3]), np.array([3, 9]),
+                              np.array([0.8, 0.4]))
+    assert got.tolist() == [0.8, 0.4, 0.0]
+    with pytest.raises(ValueError, match="more than one relation"):  # (3, 7) and (7, 3) are one pair
+        _relation_strengths(track, np.array([0]), np.array([1]), np.array([3, 7]), np.array([7, 3]),
+                            np.array([0.1, 0.2]))
+
+
+def test_tally_pairs_by_hand():
+    from evaluation.groups import _tally_pairs
+
+    # rows' true groups 5, 5, -1, -1: pair (0, 1) positive, (2, 3) negative (both alone), (0, 2) negative.
+    # 4 bins of 0.25: 0.75 -> bin 3 (its lower edge); 1.2 clipped to 1 -> the last bin; -0.1 clipped to 0 -> bin 0.
+    hist = np.zeros((2, 4), np.int64)
+    positives, related, related_pos, squared_error = _tally_pairs(
+        np.array([0.75, 1.2, -0.1]), np.array([5, 5, -1, -1]), np.array([0, 2, 0]), np.array([1, 3, 2]), 0.5, hist)
+    assert (positives, related, related_pos) == (1, 2, 1)  # related: 0.75 and 1.2
+    assert hist.tolist() == [[1, 0, 0, 1], [0, 0, 0, 1]]
+    assert squared_error.tolist() == [0.0625, 1.44, 0.010000000000000002]  # (0.75 - 1)^2, 1.2^2, (-0.1)^2
+    with pytest.raises(ValueError, match="NaN"):
+        _tally_pairs(np.array([np.nan]), np.array([0, 0]), np.array([0]), np.array([1]), 0.5, hist)

@@ -237,3 +237,78 @@ def test_detection_cuts_as_scipys_fcluster_of_the_whole_tree(method):
         theirs = fcluster(linkage(1.0 - np.where(given, strength, 0.0), method=method), 0.5, criterion="distance")
         assert (ours[:, None] == ours[None]).tolist() == (theirs[:, None] == theirs[None]).tolist()
         assert sorted(set(ours.tolist())) == list(range(len(set(ours.tolist()))))
+
+
+def test_gates_in_one_pass_by_hand():
+    from pipeline.groups.relations import _gated
+
+    # pairs in triu order: (0, 1) place 0, 3 m apart (the gate is inclusive), speeds 1 and 1.5, headings 0 and 0.5
+    # rad: kept; (0, 2) place 1, 1 m apart but speeds 1.5 m/s apart: gated; (1, 2) place 2, hypot(3, 1) m: gated
+    pos = np.array([[0.0, 0.0], [3.0, 0.0], [0.0, 1.0]])
+    at, x = _gated(pos, np.array([1.0, 1.5, 2.5]), np.array([0.0, 0.5, 0.0]), (3.0 + 1e-9) ** 2,
+                   np.array([3.0, 1.0, np.pi / 4]))
+    assert at.tolist() == [0] and x.tolist() == [[3.0, 0.5, 0.5]]
+    # headings 3 and -3 rad are 2 pi - 6 apart across the wrap
+    at, x = _gated(pos[:2] / 3, np.ones(2), np.array([3.0, -3.0]), 1.0, np.array([3.0, 1.0, np.pi / 4]))
+    assert at.tolist() == [0] and x[0, 2] == 2 * np.pi - 6.0
+
+
+def test_components_by_hand():
+    from pipeline.groups.detection import components
+
+    # edges 4-1, 1-3 and a loop at 5: {0}, {1, 3, 4}, {2}, {5}, numbered by their smallest node
+    assert components(6, np.array([4, 1, 5]), np.array([1, 3, 5])).tolist() == [0, 1, 2, 1, 1, 3]
+    assert components(3, np.zeros(0, np.int64), np.zeros(0, np.int64)).tolist() == [0, 1, 2]
+
+
+def test_nearest_neighbour_chain_and_its_cut_by_hand():
+    from pipeline.groups.detection import cut, nn_chain
+
+    # five points: 0-1 and 2-3 at 0.25, 1-2 0.375, 0-2 0.5, 1-3 0.625, 0-3 0.875, point 4 at 1 from all. The chain
+    # from 0 meets 1, mutual: merge (0, 1) at 0.25; complete linkage: {0,1} to 2 max(0.5, 0.375), to 3
+    # max(0.875, 0.625). The chain from 1 goes to 2 (0.5), then 3 (0.25), mutual: (2, 3) at 0.25; {0,1}-{2,3}
+    # max(0.5, 0.875); last the rest and 4 at 1.
+    d = {(0, 1): 0.25, (2, 3): 0.25, (1, 2): 0.375, (0, 2): 0.5, (1, 3): 0.625, (0, 3): 0.875}
+    i, j = np.triu_indices(5, 1)
+    distance = np.array([d.get((a, b), 1.0) for a, b in zip(i, j)])
+    first, second, height = nn_chain(distance, 5, False)
+    assert list(zip(first.tolist(), second.tolist(), height.tolist())) == [(0, 1, 0.25), (2, 3, 0.25),
+                                                                           (1, 3, 0.875), (3, 4, 1.0)]
+    # average linkage: {0,1}-2 (0.5 + 0.375) / 2, {0,1}-3 (0.875 + 0.625) / 2, then (0.4375 + 0.75) / 2
+    assert nn_chain(distance, 5, True)[2].tolist() == [0.25, 0.25, 0.59375, 1.0]
+    # cut at 0.5: the point left alone first, then the clusters in the order of the merge that made them
+    assert cut(first, second, height, 5, 0.5).tolist() == [1, 1, 2, 2, 0]
+    assert cut(first, second, height, 5, 0.1).tolist() == [0, 1, 2, 3, 4]
+
+
+def test_the_chain_keeps_the_previous_of_equal_neighbours():
+    from pipeline.groups.detection import cut, nn_chain
+
+    # 0-1 and 1-2 both 0.25 apart, 0-2 0.75: from 0 the chain meets 1, whose nearest is 0 or 2 at a tie; scipy
+    # keeps the previous link (0), so (0, 1) merge first and 2 joins only at max(0.75, 0.25): cut at 0.5, {0, 1}
+    # and {2}, not {0} and {1, 2}
+    first, second, height = nn_chain(np.array([0.25, 0.75, 0.25]), 3, False)
+    assert list(zip(first.tolist(), second.tolist(), height.tolist())) == [(0, 1, 0.25), (1, 2, 0.75)]
+    assert cut(first, second, height, 3, 0.5).tolist() == [1, 1, 0]
+
+
+def test_composition_tracking_prefers_the_first_remembered_among_equals_and_compares_whole_sets():
+    tr = CompositionTracker()
+    step(tr, 0.0, [{1, 2}, {3, 4}])  # ids 0 and 1, one age, one size
+    # {1, 2, 3, 4} holds both: equal size and age, so the first remembered ({1, 2}, id 0) gives its id
+    assert groups_of(step(tr, 1.0, [{1, 2, 3, 4}])) == {0: {1, 2, 3, 4}}
+    # 65 and 1 share their signature bit (65 = 1 modulo 64): {2, 65} is no subset of {1, 2, 3, 4}, a new id
+    assert groups_of(step(tr, 2.0, [{2, 65}])) == {2: {2, 65}}
+    # a cluster wider than the memory's rows so far (8 members) is remembered whole: the same ten keep their id
+    ten = set(range(100, 110))
+    g = step(tr, 3.0, [ten])
+    assert groups_of(step(tr, 4.0, [ten])) == groups_of(g) == {3: ten}
+
+
+def test_composition_memory_forgets_the_set_seen_longest_ago():
+    tr = CompositionTracker(memory=2)
+    step(tr, 0.0, [{1, 2}])  # id 0
+    step(tr, 1.0, [{3, 4}])  # id 1
+    step(tr, 2.0, [{1, 2}])  # seen again: now the newest
+    step(tr, 3.0, [{5, 6}])  # id 2: {3, 4}, seen longest ago, is forgotten, not {1, 2}
+    assert groups_of(step(tr, 4.0, [{1, 2}, {3, 4}])) == {0: {1, 2}, 3: {3, 4}}

@@ -23,10 +23,13 @@ from __future__ import annotations
 import functools
 import itertools
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from pipeline.compiled import kernel
 
 MODELS_DIR = Path(__file__).parent / "models"
 MODEL_FILES = {"svm": "relations_svm.npz", "forest": "relations_forest.npz"}
@@ -57,11 +60,53 @@ def indicators(position: np.ndarray, velocity: np.ndarray, min_speed: float = 0.
 def motion_differences(velocity: np.ndarray, min_speed: float, i: np.ndarray,
                        j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The speed and heading differences of the pairs of rows (i, j), as ``indicators`` defines them."""
+    speed, heading = _motion(velocity, min_speed)
+    return _pair_differences(speed, heading, np.ascontiguousarray(i, np.int64), np.ascontiguousarray(j, np.int64))
+
+
+def _motion(velocity: np.ndarray, min_speed: float) -> tuple[np.ndarray, np.ndarray]:
+    """Each track's speed and heading (0 rad below ``min_speed``), by numpy's hypot and arctan2 (the values the
+    classifiers were trained on)."""
     speed = np.hypot(velocity[:, 0], velocity[:, 1])
-    heading = np.where(speed >= min_speed, np.arctan2(velocity[:, 1], velocity[:, 0]), 0.0)
-    turn = np.abs(heading[i] - heading[j])
-    # both in [-pi, pi]: the difference wraps once at most
-    return np.abs(speed[i] - speed[j]), np.minimum(turn, 2 * np.pi - turn)
+    return speed, np.where(speed >= min_speed, np.arctan2(velocity[:, 1], velocity[:, 0]), 0.0)
+
+
+@kernel
+def _difference(speed, heading, a, b):
+    """The speed and heading differences of tracks a and b (headings in [-pi, pi]: the difference wraps once at
+    most)."""
+    turn = abs(heading[a] - heading[b])
+    return abs(speed[a] - speed[b]), min(turn, 2 * math.pi - turn)
+
+
+@kernel
+def _pair_differences(speed, heading, i, j):
+    """``_difference`` of each pair of rows (i, j)."""
+    ds, turn = np.empty(len(i)), np.empty(len(i))
+    for p in range(len(i)):
+        ds[p], turn[p] = _difference(speed, heading, i[p], j[p])
+    return ds, turn
+
+
+@kernel
+def _gated(position, speed, heading, near, limits):
+    """The pairs of tracks i < j inside the three gates, as their place in ``pairs``' order, and their indicators.
+    The squared distance is checked first (``near``: the distance gate squared, widened past any rounding): a
+    crowd's pairs are most of them farther, and cost no hypot."""
+    n = len(position)
+    at, x = np.empty(n * (n - 1) // 2, np.int64), np.empty((n * (n - 1) // 2, 3))
+    k = m = 0
+    for a in range(n):
+        for b in range(a + 1, n):
+            dx, dy = position[a, 0] - position[b, 0], position[a, 1] - position[b, 1]
+            if dx * dx + dy * dy <= near:
+                distance = math.hypot(dx, dy)
+                ds, turn = _difference(speed, heading, a, b)
+                if distance <= limits[0] and ds <= limits[1] and turn <= limits[2]:
+                    at[m], x[m, 0], x[m, 1], x[m, 2] = k, distance, ds, turn
+                    m += 1
+            k += 1
+    return at[:m], x[:m]
 
 
 def monomials(z: np.ndarray, powers: np.ndarray) -> np.ndarray:
@@ -210,21 +255,15 @@ class RelationEstimator:
         self.min_speed = min_speed
 
     def strengths(self, position: np.ndarray, velocity: np.ndarray):
-        """(i, j, strength) of every pair i < j of tracks by row; the indicators only of the pairs within the
-        distance gate (a crowd's pairs are most of them farther), each gate applied before the indicators are
-        put together."""
+        """(i, j, strength) of every pair i < j of tracks by row: the classifier on the pairs inside the gates,
+        found by one pass over the pairs (``_gated``)."""
         i, j = pairs(len(position))
-        xy = np.ascontiguousarray(position, float).view(np.complex128).ravel()  # x + iy: one gather per pair end
-        d = xy[i] - xy[j]
-        near = np.flatnonzero(d.real * d.real + d.imag * d.imag <= (self.limits[0] + 1e-9) ** 2)
-        distance = np.hypot(d.real[near], d.imag[near])
-        speed_difference, turn = motion_differences(velocity, self.min_speed, i[near], j[near])
-        passes = np.flatnonzero((distance <= self.limits[0]) & (speed_difference <= self.limits[1])
-                                & (turn <= self.limits[2]))
+        speed, heading = _motion(velocity, self.min_speed)
+        at, features = _gated(np.ascontiguousarray(position, np.float64), speed, heading,
+                              (self.limits[0] + 1e-9) ** 2, self.limits)
         strength = np.full(len(i), GATED_STRENGTH)
-        if len(passes):
-            features = np.column_stack([distance[passes], speed_difference[passes], turn[passes]])
-            strength[near[passes]] = self.classifier.predict_proba(features)
+        if len(at):
+            strength[at] = self.classifier.predict_proba(features)
         return i, j, strength
 
 
