@@ -18,6 +18,7 @@ import mujoco
 import numpy as np
 
 from pipeline.camera_geometry import floor_homography, image_to_floor
+from pipeline.compiled import kernel
 from pipeline.frames import inverse, rotation
 from pipeline.params import REQUIRED, param
 from pipeline.types import CameraFrame, DepthFrame
@@ -569,13 +570,8 @@ class WallCamera(CameraSensor):
         world = self.renderer.render(self.name, depth=True, segmentation=False, rgb=self.rgb)
         slots = np.arange(s.alive)
         owner, u, v, z, part, weight = person_pixels(s, self.name, k, slots)
-        inside = weight == 1.0
         pixel = v * k.width + u
-        # the nearest person at each pixel of the image, where nearer than the world
-        front = np.flatnonzero(inside & (z < world["depth"].ravel()[np.where(inside, pixel, 0)]))
-        nearest = np.full(k.width * k.height, np.inf, np.float32)
-        np.minimum.at(nearest, pixel[front], z[front])
-        shows = front[z[front] == nearest[pixel[front]]]
+        shows = _in_front(world["depth"].ravel(), pixel, z, weight == 1.0)
         seg = np.full(k.width * k.height, -1, np.int64)
         seg[pixel[shows]] = s.slot_person_id[slots[owner[shows]]]
         rgb = world.get("rgb")
@@ -599,6 +595,26 @@ class WallCamera(CameraSensor):
         fraction = np.minimum(seen[ids] / np.maximum(full[ids], 1), 1.0)[order]
         return CameraFrame(stamp, self.name, rgb, seg.reshape(k.height, k.width), s.slot_person_id[slots[ids]][order],
                            boxes, full_boxes, fraction, self.camera_matrix)
+
+
+@kernel
+def _in_front(world_depth, pixel, z, inside):
+    """Which silhouette pixels (at ``pixel`` of the image, z-depth ``z``, in the image where ``inside``) show: those
+    nearer than the world there and as near as the nearest person's there, in their order."""
+    nearest = np.full(len(world_depth), np.inf, np.float32)
+    for h in range(len(z)):
+        if inside[h] and z[h] < world_depth[pixel[h]] and z[h] < nearest[pixel[h]]:
+            nearest[pixel[h]] = z[h]
+    count = 0
+    for h in range(len(z)):
+        count += inside[h] and z[h] < world_depth[pixel[h]] and z[h] == nearest[pixel[h]]
+    shows = np.empty(count, np.int64)
+    count = 0
+    for h in range(len(z)):
+        if inside[h] and z[h] < world_depth[pixel[h]] and z[h] == nearest[pixel[h]]:
+            shows[count] = h
+            count += 1
+    return shows
 
 
 def person_pixels(scene: Scene, camera: str, intrinsics: Intrinsics, slots: np.ndarray):
