@@ -204,23 +204,35 @@ def normals(scene, slot: np.ndarray, part: np.ndarray, points: np.ndarray) -> np
     """Outward unit normals [n, 3] at surface points [n, 3] of the given parts of the persons in ``slot``: from the
     nearest point of the part's axis (the torso's vertical axis at the point's height, the head's centre, the leg's
     segment), vertical on the torso's flat ends."""
-    k = scene.person_scale[slot]
-    axis = np.empty_like(points)
-    axis[:, :2] = scene.person_xy[slot]
-    axis[:, 2] = np.where(part == HEAD, body.HEAD_CENTRE * k, points[:, 2])
-    for p, leg in ((LEFT_LEG, 0), (RIGHT_LEG, 1)):
-        sel = np.flatnonzero(part == p)
-        a = scene.hips[slot[sel], leg]
-        e = scene.feet[slot[sel], leg] - a
-        s = np.clip(np.einsum("ij,ij->i", points[sel] - a, e) / np.einsum("ij,ij->i", e, e), 0, 1)
-        axis[sel] = a + s[:, None] * e
-    n = points - axis
-    length = np.sqrt(np.einsum("ij,ij->i", n, n))
-    cap = (part == TORSO) & (length < 0.98 * body.TORSO_RADIUS * k)
-    n[cap] = 0.0
-    n[cap, 2] = np.sign(points[cap, 2] - (body.TORSO_BOTTOM + body.TORSO_TOP) / 2 * k[cap])
-    length[cap] = 1.0
-    return n / np.maximum(length, 1e-12)[:, None]
+    return _normals(np.asarray(part, np.int64), np.ascontiguousarray(points, np.float64), scene.person_scale[slot],
+                    scene.person_xy[slot], scene.hips[slot], scene.feet[slot],
+                    (body.HEAD_CENTRE, 0.98 * body.TORSO_RADIUS, (body.TORSO_BOTTOM + body.TORSO_TOP) / 2))
+
+
+@kernel
+def _normals(part, points, scale, xy, hips, feet, measures):
+    """``normals`` on each person's values (scale, position, hips and leg ends [n, 2, 3]) and the adult body's
+    ``measures``: the head's centre, the torso's flat ends' radius and middle height."""
+    head_centre, flat_radius, middle = measures
+    out = np.empty_like(points)
+    for p in range(len(part)):
+        x, y, z = points[p]
+        if part[p] == LEFT_LEG or part[p] == RIGHT_LEG:
+            a, b = hips[p, part[p] - LEFT_LEG], feet[p, part[p] - LEFT_LEG]
+            ex, ey, ez = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+            s = ((0.0 + (x - a[0]) * ex) + (y - a[1]) * ey + (z - a[2]) * ez) / ((0.0 + ex * ex) + ey * ey + ez * ez)
+            s = min(max(s, 0.0), 1.0)
+            ax, ay, az = a[0] + s * ex, a[1] + s * ey, a[2] + s * ez
+        else:
+            ax, ay, az = xy[p, 0], xy[p, 1], head_centre * scale[p] if part[p] == HEAD else z
+        nx, ny, nz = x - ax, y - ay, z - az
+        length = np.sqrt((0.0 + nx * nx) + ny * ny + nz * nz)
+        if part[p] == TORSO and length < flat_radius * scale[p]:  # a flat end: straight up or down
+            nx, ny, nz = 0.0, 0.0, np.sign(z - middle * scale[p])
+            length = 1.0
+        length = max(length, 1e-12)
+        out[p, 0], out[p, 1], out[p, 2] = nx / length, ny / length, nz / length
+    return out
 
 
 def colours(person_ids: np.ndarray) -> np.ndarray:

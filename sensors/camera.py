@@ -358,11 +358,18 @@ class RaycastRenderer:
         return out
 
 
+@kernel
 def shade(colour: np.ndarray, normal: np.ndarray, view: np.ndarray) -> np.ndarray:
     """Flat colours [n, 3] in [0, 1] lit by a light at the eye (bright where the surface faces the ray ``view``),
     as 8-bit RGB."""
-    facing = np.abs(np.einsum("ij,ij->i", normal, view)) / np.maximum(np.linalg.norm(view, axis=1), 1e-12)
-    return (255 * np.clip(colour * (0.35 + 0.65 * facing)[:, None], 0, 1)).astype(np.uint8)
+    out = np.empty((len(colour), 3), np.uint8)
+    for p in range(len(colour)):
+        (nx, ny, nz), (vx, vy, vz) = normal[p], view[p]
+        facing = abs((0.0 + nx * vx) + ny * vy + nz * vz) / max(np.sqrt(vx * vx + vy * vy + vz * vz), 1e-12)
+        light = 0.35 + 0.65 * facing
+        for c in range(3):
+            out[p, c] = np.uint8(255 * min(max(colour[p, c] * light, 0.0), 1.0))
+    return out
 
 
 def make_renderer(scene: Scene, intrinsics: Intrinsics, exclude_body: int = -1, rgb: bool = False,

@@ -296,3 +296,13 @@ def test_a_fixed_camera_draws_the_robot_over_the_world_it_drew_once(renderer, mo
             assert (centre >= 3.0 - 0.425 - 1e-3).all() and (centre <= 3.0 - 0.425 * np.cos(np.pi / 16) + 1e-3).all()
         elif not seen:
             np.testing.assert_allclose(centre, 4.95, atol=2e-3)
+
+
+def test_shading_by_the_angle_to_the_eye():
+    # colour (0.5, 1, 0.2): facing the eye (a view twice as long changes nothing) at full strength, 255 x colour
+    # truncated; edge-on at 0.35 of it; 45 degrees at 0.35 + 0.65 cos 45 = 0.80962
+    from sensors.camera import shade
+    colour = np.array([[0.5, 1.0, 0.2]] * 3)
+    normal = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-np.sqrt(0.5), np.sqrt(0.5), 0.0]])
+    view = np.array([[2.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    np.testing.assert_array_equal(shade(colour, normal, view), [[127, 255, 51], [44, 89, 17], [103, 206, 41]])
