@@ -128,15 +128,21 @@ class GroupMetrics:
         gt_id, gt_group = _i(frame.gt_id), _i(frame.gt_group)
         n = gt_id.size
         pos = np.asarray(frame.gt_position, np.float64).reshape(n, 2)
-        m_track = _i(frame.matched_track)
-        m_row = _rows(gt_id, _i(frame.matched_gt))
+        m_track, m_gt, g_id, g_track = (_i(frame.matched_track), _i(frame.matched_gt), _i(frame.group_id),
+                                        _i(frame.group_track))
+        # the kernels below read these by each other's rows (and numba checks no bounds)
+        for names, first, second in (("gt_id and gt_group", gt_id, gt_group),
+                                     ("matched_gt and matched_track", m_gt, m_track),
+                                     ("group_id and group_track", g_id, g_track)):
+            if first.size != second.size:
+                raise ValueError(f"{names} must have one entry each per row: got {first.size} and {second.size}")
+        m_row = _rows(gt_id, m_gt)
         if (m_row < 0).any():
             raise ValueError("matched_gt must be counted persons of the frame")
         self._frames += 1
         # The tracked groups as the persons see them (excused members dropped, false positive tracks in the sizes
         # only), and the true groups as dense numbers of the counted persons' groups.
-        response, det_ids, det_size = _response(n, m_row, m_track, _i(frame.excused_track), _i(frame.group_id),
-                                                _i(frame.group_track))
+        response, det_ids, det_size = _response(n, m_row, m_track, _i(frame.excused_track), g_id, g_track)
         true_of, true_ids, true_size = _numbered(gt_group, gt_group >= 0)
         self._match_groups(true_of, true_ids, true_size, response, det_ids, det_size)
         self._mitre = [total + part for total, part in zip(self._mitre, (*_mitre(true_of, response),

@@ -8,7 +8,11 @@ twin kept in step), and its tests check it against hand-worked values.
 The settings: ``cache=True`` keeps the machine code next to the module (or in numba's user cache where the package
 is read-only), so a process after the first loads it instead of compiling; ``error_model="numpy"`` makes a division
 by zero give inf or NaN as numpy does, rather than raise; no ``fastmath``, so the arithmetic is IEEE's, in the order
-written.
+written. numba checks no array bounds: the Python function that calls a kernel checks the shapes of what it was given.
+
+numba's cache keys a kernel on its own source file: one that calls a kernel of another module (this one's
+``segment_sum``, ``by_label``) keeps its old machine code when only that other module changes. After editing a kernel
+that others call, clear the caches (``find . -name '*.nbi' -delete``); a fresh install has no cache to go stale.
 """
 
 from __future__ import annotations
@@ -102,18 +106,18 @@ def segment_sum(values, lo, n):
 
 @kernel
 def by_label(labels, k):
-    """The elements of labels 0..k-1 (others, such as -1, left out) in order of label, then of element (a counting
+    """The elements of labels 0..k-1 (others, such as -1 or k, left out) in order of label, then of element (a counting
     sort): label c's are ``order[start[c]:start[c + 1]]``. For the clusters of a cycle, where numpy's argsort and
     unique cost their call overhead many times over."""
     start = np.zeros(k + 1, np.int64)
     for c in labels:
-        if c >= 0:
+        if 0 <= c < k:
             start[c + 1] += 1
     for c in range(k):
         start[c + 1] += start[c]
     order, fill = np.empty(start[k], np.int64), start[:k].copy()
     for e in range(len(labels)):
-        if labels[e] >= 0:
+        if 0 <= labels[e] < k:
             order[fill[labels[e]]] = e
             fill[labels[e]] += 1
     return start, order

@@ -9,7 +9,11 @@ the pixels they cover cost a fraction of that, and the surfaces are the exact pr
 part per pixel, in one kernel (the cost was numpy's per-call overhead: 3.7 ms for the 93 people of a wall camera's
 view). Each primitive is a scalar kernel that takes a ray origin relative to the primitive and a direction d of any
 length, and returns the ray parameter t of the first surface point o + t d with t >= 0 (inf where the ray misses).
-Single precision, as every value is float32: relative to each person, a millimetre is far below a pixel here.
+Single precision, as every value is float32: relative to each person, a millimetre is far below a pixel here. A
+pixel's ray is summed in float64 in the order written and then rounded to float32; the matrix product it replaced
+(BLAS, with fused multiply-adds) differs in the last float64 bit for about one value in eight, and gave the same
+float32 in all of 2 million. The normals' three-term sums, in the order written, differ from numpy's ``einsum``
+(which adds the first and third terms first) by up to 3e-14: no 8-bit colour moved in 400 wall-camera frames.
 """
 
 from __future__ import annotations
@@ -179,14 +183,14 @@ def bodies(scene, slot: np.ndarray) -> tuple[np.ndarray, ...]:
     return sizes, scene.person_xy[slot].astype(F), scene.hips[slot].astype(F), scene.feet[slot].astype(F)
 
 
-PART_CORNERS = (slice(0, 8), slice(8, 16), slice(16, 24), slice(24, 32))  # of part_box_corners, by part
+UNIT_BOX = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)  # [-1, 1]^3
 
 
 def part_box_corners(scene, slot: np.ndarray) -> np.ndarray:
-    """Corners [n, 32, 3] of boxes round each person's torso, head, left leg and right leg (``PART_CORNERS``): their
+    """Corners [n, 32, 3] of boxes round each person's torso, head, left leg and right leg (8 each, in turn): their
     projection bounds each part's, and the person's, in a camera that has all of them in front."""
     k = scene.person_scale[slot][:, None, None]
-    unit = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
+    unit = UNIT_BOX
     centre = np.zeros((len(slot), 1, 3))
     centre[..., :2] = scene.person_xy[slot][:, None]
     mid, half = (body.TORSO_BOTTOM + body.TORSO_TOP) / 2, (body.TORSO_TOP - body.TORSO_BOTTOM) / 2
@@ -220,13 +224,13 @@ def _normals(part, points, scale, xy, hips, feet, measures):
         if part[p] == LEFT_LEG or part[p] == RIGHT_LEG:
             a, b = hips[p, part[p] - LEFT_LEG], feet[p, part[p] - LEFT_LEG]
             ex, ey, ez = b[0] - a[0], b[1] - a[1], b[2] - a[2]
-            s = ((0.0 + (x - a[0]) * ex) + (y - a[1]) * ey + (z - a[2]) * ez) / ((0.0 + ex * ex) + ey * ey + ez * ez)
+            s = ((x - a[0]) * ex + (y - a[1]) * ey + (z - a[2]) * ez) / (ex * ex + ey * ey + ez * ez)
             s = min(max(s, 0.0), 1.0)
             ax, ay, az = a[0] + s * ex, a[1] + s * ey, a[2] + s * ez
         else:
             ax, ay, az = xy[p, 0], xy[p, 1], head_centre * scale[p] if part[p] == HEAD else z
         nx, ny, nz = x - ax, y - ay, z - az
-        length = np.sqrt((0.0 + nx * nx) + ny * ny + nz * nz)
+        length = np.sqrt(nx * nx + ny * ny + nz * nz)
         if part[p] == TORSO and length < flat_radius * scale[p]:  # a flat end: straight up or down
             nx, ny, nz = 0.0, 0.0, np.sign(z - middle * scale[p])
             length = 1.0

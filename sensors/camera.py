@@ -80,10 +80,12 @@ class GLRenderer:
     render state (which costs far more than a pass under Mesa). Colour and depth without segmentation take the
     colour pass alone. ``people=False`` draws the world without the people.
 
-    ``fixed=True`` is for a camera that never moves (a wall camera): the world that never moves (floor, walls,
-    obstacles) is drawn once per camera and kept, and each render draws the robot alone, reads back only the pixels
-    its box covers and keeps those as near as the kept world's or nearer, as GL's depth test would have. That costs a quarter
-    of drawing the whole view under Mesa, and gives the same image; it gives depth and colour, not segmentation.
+    ``fixed=True`` is for a camera that never moves (a wall camera) and draws no people: the world that never moves
+    (floor, walls, obstacles) is drawn once per camera and kept, and each render draws the robot alone, reads back
+    only the pixels its box covers and keeps those as near as the kept world's or nearer, as GL's depth test would
+    have. That costs a quarter of drawing the whole view under Mesa. It gives depth and colour, not segmentation, and
+    the same images as drawing the whole view but where the robot and the floor tie in depth (one pixel of 1,200
+    frames of the airport's wall cameras, none of what a run writes).
     """
 
     def __init__(self, scene: Scene, intrinsics: Intrinsics, rgb: bool = False, people: bool = True,
@@ -100,6 +102,8 @@ class GLRenderer:
         self.people = people
         self.rgb = rgb
         self.range_max = range_max  # nothing wholly farther than this (z-depth) is drawn
+        if fixed and people:
+            raise ValueError("a fixed camera's renderer draws no people (they would stay as drawn first)")
         self.fixed = fixed
         self.camera = mujoco.MjvCamera()
         self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
@@ -124,7 +128,7 @@ class GLRenderer:
         boxes = np.flatnonzero((m.geom_type == mujoco.mjtGeom.mjGEOM_BOX) & (m.geom_bodyid == 0))
         d = mujoco.MjData(m)  # the world body's geoms placed (the scene may not have been synced yet)
         mujoco.mj_kinematics(m, d)
-        unit = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
+        unit = bodycast.UNIT_BOX
         self._walls = boxes
         self._wall_corners = (d.geom_xpos[boxes][:, None, :] + np.einsum(
             "nij,nkj->nki", d.geom_xmat[boxes].reshape(-1, 3, 3), unit[None] * m.geom_size[boxes][:, None, :]))
@@ -138,7 +142,7 @@ class GLRenderer:
                 sc.flags[flag] = False
         self.ids.flags[mujoco.mjtRndFlag.mjRND_SEGMENT] = True
         self.ids.flags[mujoco.mjtRndFlag.mjRND_IDCOLOR] = True
-        self._static = {}  # a fixed camera's world without the robot: its colour and depth buffers, by camera
+        self._static = {}  # a fixed camera's world without the robot: colour and depth, by camera and colour or not
 
     def __del__(self):
         # GL object names belong to a context: the MjrContext must be freed with its own context current, or it
@@ -241,15 +245,15 @@ class GLRenderer:
         """A fixed camera's depth and colour: the world without the robot as drawn once, and the robot drawn over
         it."""
         scene, groups = self.colour if rgb else self.ids, self.option.geomgroup
-        if camera not in self._static:
+        if (camera, rgb) not in self._static:
             groups[ROBOT_GROUP] = 0
             self._draw(scene, camera)
             groups[ROBOT_GROUP] = 1
             image = np.zeros((*self.shape, 3), np.uint8)
             mujoco.mjr_readPixels(image if rgb else None, self._depth, self.rect, self.mjr)
             buffer = self._depth[::-1].copy()  # GL's rows run bottom-up
-            self._static[camera] = image[::-1].copy(), buffer, self._z(buffer)
-        static_image, static_buffer, static_z = self._static[camera]
+            self._static[camera, rgb] = image[::-1].copy(), buffer, self._z(buffer)
+        static_image, static_buffer, static_z = self._static[camera, rgb]
         out = {"depth": static_z.copy(), "rgb": static_image.copy() if rgb else None}
         box = robot_box(self.scene, camera, self.intrinsics)
         if box is not None:
@@ -277,7 +281,7 @@ def robot_box(scene: Scene, camera: str, intrinsics: Intrinsics) -> tuple[int, i
     it lies outside the view."""
     m, d = scene.model, scene.data
     geoms = np.flatnonzero(m.geom_bodyid == scene.robot_body)
-    unit = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
+    unit = bodycast.UNIT_BOX
     aabb = m.geom_aabb[geoms]  # centre and half sizes in each geom's frame
     local = aabb[:, None, :3] + unit[None] * aabb[:, None, 3:]
     corners = (d.geom_xpos[geoms][:, None] + np.einsum("nij,nkj->nki", d.geom_xmat[geoms].reshape(-1, 3, 3), local))
@@ -297,8 +301,8 @@ def robot_box(scene: Scene, camera: str, intrinsics: Intrinsics) -> tuple[int, i
 class RaycastRenderer:
     """The fallback without OpenGL: one ray per pixel from the camera, flat colours shaded by the surface angle.
 
-    ``fixed=True``, for a camera that never moves, casts the world that never moves once and after that only the
-    rays of the pixels the robot can cover, against the robot, as ``GLRenderer`` draws it."""
+    ``fixed=True``, for a camera that never moves and sees no people, casts the world that never moves once and
+    after that only the rays of the pixels the robot can cover, against the robot, as ``GLRenderer`` draws it."""
 
     backend = "raycast"
 
@@ -309,8 +313,11 @@ class RaycastRenderer:
         self.exclude_body = exclude_body
         self.groups = np.ones(6, np.uint8)  # MuJoCo's include mask over geom groups
         self.groups[TORSO_GROUP:LEG_GROUP + 1] = people
+        if fixed and people:
+            raise ValueError("a fixed camera's renderer draws no people (they would stay as cast first)")
         self.fixed = fixed
         self._static = {}  # a fixed camera's casts without the robot (geom, distance, normal), by camera
+        self._version = scene.version  # the model the casts were made in
         dirs = intrinsics.pixel_directions().reshape(-1, 3)
         self.z_per_metre = 1.0 / np.linalg.norm(dirs, axis=1)  # z-depth per metre along a pixel's ray
         self.unit = dirs * self.z_per_metre[:, None]
@@ -326,6 +333,8 @@ class RaycastRenderer:
 
     def _over_static(self, camera: str, origin: np.ndarray, vec: np.ndarray):
         """A fixed camera's casts: the world without the robot as cast once, the robot's where it is nearer."""
+        if self._version != self.scene.version:  # a model made anew numbers its geoms anew
+            self._static, self._version = {}, self.scene.version
         if camera not in self._static:
             self._static[camera] = self._cast(origin, vec, np.where(np.arange(6) == ROBOT_GROUP, 0, self.groups))
         geom, dist, normal = (a.copy() for a in self._static[camera])
@@ -336,7 +345,8 @@ class RaycastRenderer:
             robot = np.zeros(6, np.uint8)
             robot[ROBOT_GROUP] = 1
             g, r, nr = self._cast(origin, vec[rows], robot)
-            nearer = (r >= 0) & ((r < dist[rows]) | (dist[rows] < 0))  # a tie to the geom first in the model, as one cast
+            # a tie goes to the geom first in the model, as in one cast
+            nearer = (r >= 0) & ((r < dist[rows]) | (dist[rows] < 0))
             geom[rows[nearer]], dist[rows[nearer]], normal[rows[nearer]] = g[nearer], r[nearer], nr[nearer]
         return geom, dist, normal
 
@@ -365,7 +375,7 @@ def shade(colour: np.ndarray, normal: np.ndarray, view: np.ndarray) -> np.ndarra
     out = np.empty((len(colour), 3), np.uint8)
     for p in range(len(colour)):
         (nx, ny, nz), (vx, vy, vz) = normal[p], view[p]
-        facing = abs((0.0 + nx * vx) + ny * vy + nz * vz) / max(np.sqrt(vx * vx + vy * vy + vz * vz), 1e-12)
+        facing = abs(nx * vx + ny * vy + nz * vz) / max(np.sqrt(vx * vx + vy * vy + vz * vz), 1e-12)
         light = 0.35 + 0.65 * facing
         for c in range(3):
             out[p, c] = np.uint8(255 * min(max(colour[p, c] * light, 0.0), 1.0))

@@ -43,3 +43,6 @@ def test_by_label_is_a_counting_sort():
     # element 1 (-1) is left out
     start, order = by_label(np.array([2, -1, 0, 2, 0]), 3)
     assert start.tolist() == [0, 2, 2, 4] and order.tolist() == [2, 4, 0, 3]
+    # with k = 2, label 2 is beyond the table and left out as -1 is
+    start, order = by_label(np.array([2, -1, 0, 2, 0]), 2)
+    assert start.tolist() == [0, 2, 2] and order.tolist() == [2, 4]

@@ -185,6 +185,14 @@ def test_bad_input():
         run(GroupFrame(gt_id=[1], gt_group=[-1], gt_position=[[0, 0]], matched_gt=[2], matched_track=[2]))
     with pytest.raises(ValueError):
         GroupMetrics(bins=0)
+    # fields read by each other's rows, of different lengths: named, not read past their ends
+    one = dict(gt_id=[1, 2], gt_group=[0, 0], gt_position=[[0, 0], [1, 0]], matched_gt=[1, 2], matched_track=[5, 6])
+    for field, value, names in (("gt_group", [0], "gt_id and gt_group"),
+                                ("matched_track", [5], "matched_gt and matched_track"),
+                                ("group_track", [5], "group_id and group_track")):
+        bad = {**one, "group_id": [9, 9], "group_track": [5, 6], field: value}
+        with pytest.raises(ValueError, match=names):
+            run(GroupFrame(**bad))
 
 
 def reference(frames):

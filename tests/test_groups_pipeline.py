@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from pipeline.groups import CoherentMotionGroups
-from pipeline.groups.detection import detect_groups
+from pipeline.groups.detection import LINKAGES, detect_groups
 from pipeline.groups.relations import (GATED_STRENGTH, SPENCER, LongTermRelations, RelationEstimator, indicators,
                                        monomial_powers, save_model, tabulate)
 from pipeline.groups.tracking import CompositionTracker
@@ -312,3 +312,13 @@ def test_composition_memory_forgets_the_set_seen_longest_ago():
     step(tr, 2.0, [{1, 2}])  # seen again: now the newest
     step(tr, 3.0, [{5, 6}])  # id 2: {3, 4}, seen longest ago, is forgotten, not {1, 2}
     assert groups_of(step(tr, 4.0, [{1, 2}, {3, 4}])) == {0: {1, 2}, 3: {3, 4}}
+
+
+def test_detect_groups_and_the_tracker_reject_rows_they_do_not_have():
+    for method in LINKAGES:
+        with pytest.raises(ValueError, match="0 <= "):
+            detect_groups(3, np.array([0]), np.array([3]), np.array([0.9]), method=method)  # row 3 of 3
+        with pytest.raises(ValueError, match="one entry each"):
+            detect_groups(3, np.array([0, 1]), np.array([1, 2]), np.array([0.9]), method=method)
+    with pytest.raises(ValueError, match="one entry each"):
+        CompositionTracker().update(0.0, "map", np.array([1, 2]), np.zeros((2, 2)), np.array([0]))

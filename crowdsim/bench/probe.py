@@ -18,7 +18,7 @@ import time
 def loop(scenario: str, duration: float) -> dict:
     """Simulated seconds per CPU second of ``scenario``'s loop after its warm-up (what ``Simulation.frames`` does:
     sensors, robot software, ground truth). A first second runs untimed, so that a fresh checkout's compiling of
-    its kernels (a cost of the first run alone, reported apart) is not timed."""
+    its kernels (a one-off cost of the first run after an install, not of the loop) is not timed."""
     from crowdsim.loop import Simulation
     from scenarios import load_scenario
 

@@ -26,6 +26,8 @@ def components(n, a, b):
     before the rest of its set (scipy's csgraph costs more in checking its input at a crowd's size)."""
     parent = np.arange(n)
     for e in range(len(a)):
+        if not (0 <= a[e] < n and 0 <= b[e] < n):
+            raise ValueError("edges: expected nodes 0 <= a, b < n")
         x, y = _root(parent, a[e]), _root(parent, b[e])
         if x < y:
             parent[y] = x
@@ -58,6 +60,9 @@ def detect_groups(n: int, i: np.ndarray, j: np.ndarray, strength: np.ndarray, th
     strength) between rows i < j."""
     if method not in LINKAGES:
         raise ValueError(f"method: expected one of {', '.join(LINKAGES)}, got {method!r}")
+    if not len(i) == len(j) == len(strength):
+        raise ValueError(f"i, j and strength: expected one entry each per relation, got {len(i)}, {len(j)} and "
+                         f"{len(strength)}")
     if method == "single":
         link = strength >= threshold
         return components(n, i[link], j[link])
@@ -74,6 +79,8 @@ def _linkage_groups(n, i, j, strength, threshold, average):
     related = np.zeros((n, n))  # filled above the diagonal, 0 where a pair is missing
     linked = np.zeros(n, np.bool_)
     for e in range(len(i)):
+        if not 0 <= i[e] < j[e] < n:
+            raise ValueError("i, j: expected rows 0 <= i < j < n")
         related[i[e], j[e]] = strength[e]
         if strength[e] >= threshold:
             linked[i[e]] = linked[j[e]] = True
@@ -118,55 +125,65 @@ def _condensed(n, a, b):
 
 @kernel
 def nn_chain(distance, n, average):
-    """The merges of complete (else ``average``) linkage on the condensed ``distance`` matrix of ``n`` points, as
-    scipy's ``linkage`` finds them (its ``_hierarchy.nn_chain``: the same scan order and strict comparisons, so ties
-    break alike, and the same Lance-Williams updates): x < y, the points standing for the two clusters merged, and
-    the height, in ascending height (a stable sort of the chain's order, as scipy's)."""
+    """The merges of complete (else ``average``) linkage on the condensed ``distance`` matrix of ``n`` points, by the
+    nearest-neighbour chain (Murtagh 1983; Muellner 2011, arXiv:1109.2378, Fig. 4), with the tie rules of scipy's
+    ``linkage`` so that ties merge alike: the chain starts at the first active cluster; the nearest neighbour is the
+    first found at the least distance in index order, the cluster below the chain's top winning every tie. Returns
+    each merge's two clusters, each named by a point of it (x < y; y names the merged one), and its height, in
+    ascending height (a stable sort: equal heights in the order merged)."""
     d = distance.copy()
-    size = np.ones(n, np.int64)
+    size = np.ones(n, np.int64)  # 0: merged into another
     chain = np.empty(n, np.int64)
-    length = 0
+    top = -1  # the chain's top, chain[:top + 1]
     first, second, height = np.empty(n - 1, np.int64), np.empty(n - 1, np.int64), np.empty(n - 1)
-    x = y = 0
     for k in range(n - 1):
-        if length == 0:
-            length = 1
-            for v in range(n):
-                if size[v] > 0:
-                    chain[0] = v
-                    break
-        while True:  # along the chain of nearest neighbours until two are each other's
-            x = chain[length - 1]
-            if length > 1:  # the previous one first, so that the chain does not cycle among equals
-                y = chain[length - 2]
-                nearest = d[_condensed(n, x, y)]
-            else:
-                nearest = np.inf
-            for v in range(n):
-                if size[v] > 0 and v != x and d[_condensed(n, x, v)] < nearest:
-                    nearest, y = d[_condensed(n, x, v)], v
-            if length > 1 and y == chain[length - 2]:
+        if top < 0:  # a new chain, from the first active cluster
+            top, chain[0] = 0, 0
+            while size[chain[0]] == 0:
+                chain[0] += 1
+        while True:
+            x = chain[top]
+            below = chain[top - 1] if top > 0 else -1
+            y, gap = _nearest(d, n, size, x, below)
+            if y == below:  # x and y are each other's nearest: merge them
                 break
-            chain[length] = y
-            length += 1
-        length -= 2
-        if x > y:
-            x, y = y, x
-        nx, ny = size[x], size[y]
-        first[k], second[k], height[k] = x, y, nearest
-        size[x], size[y] = 0, nx + ny  # y stands for the merged cluster
-        for v in range(n):
-            if size[v] > 0 and v != y:
-                dx, dy = d[_condensed(n, v, x)], d[_condensed(n, v, y)]
-                d[_condensed(n, v, y)] = (nx * dx + ny * dy) / (nx + ny) if average else max(dx, dy)
-    for k in range(1, n - 1):  # an insertion sort: stable, and the chain's heights come nearly in order
-        a, b, h = first[k], second[k], height[k]
+            top += 1
+            chain[top] = y
+        top -= 2
+        x, y = min(x, y), max(x, y)
+        first[k], second[k], height[k] = x, y, gap
+        _merge(d, n, size, x, y, average)
+    for k in range(1, n - 1):  # a stable insertion sort: the chain's heights come nearly in order
         p = k
-        while p > 0 and height[p - 1] > h:
-            first[p], second[p], height[p] = first[p - 1], second[p - 1], height[p - 1]
+        while p > 0 and height[p - 1] > height[p]:
+            first[p - 1], first[p] = first[p], first[p - 1]
+            second[p - 1], second[p] = second[p], second[p - 1]
+            height[p - 1], height[p] = height[p], height[p - 1]
             p -= 1
-        first[p], second[p], height[p] = a, b, h
     return first, second, height
+
+
+@kernel
+def _nearest(d, n, size, x, below):
+    """The active cluster nearest to ``x`` and its distance: ``below`` (-1: none) unless another is strictly nearer,
+    else the first at the least distance in index order."""
+    y, gap = below, d[_condensed(n, x, below)] if below >= 0 else np.inf
+    for v in range(n):
+        if size[v] > 0 and v != x and d[_condensed(n, x, v)] < gap:
+            y, gap = v, d[_condensed(n, x, v)]
+    return y, gap
+
+
+@kernel
+def _merge(d, n, size, x, y, average):
+    """Cluster x merged into y: the distances from y to the rest by the linkage's Lance-Williams rule (complete: the
+    larger; average: weighted by the clusters' sizes)."""
+    nx, ny = size[x], size[y]
+    size[x], size[y] = 0, nx + ny
+    for v in range(n):
+        if size[v] > 0 and v != y:
+            dx, dy = d[_condensed(n, v, x)], d[_condensed(n, v, y)]
+            d[_condensed(n, v, y)] = (nx * dx + ny * dy) / (nx + ny) if average else max(dx, dy)
 
 
 @kernel

@@ -43,6 +43,9 @@ class CompositionTracker:
     def update(self, stamp: float, frame: str, track_id: np.ndarray, position: np.ndarray,
                labels: np.ndarray) -> TrackedGroups:
         """The groups of this cycle's clusters (``labels`` 0..k-1, one per track) of two or more tracks."""
+        if not len(track_id) == len(position) == len(labels) or (len(labels) and np.min(labels) < 0):
+            raise ValueError(f"track_id, position and labels: expected one entry each per track and labels >= 0, got "
+                             f"{len(track_id)}, {len(position)} and {len(labels)} entries")
         if len(track_id) > self.members.shape[1]:  # room for a cluster of all the tracks
             wider = np.zeros((len(self.members), max(len(track_id), 2 * self.members.shape[1])), np.int64)
             wider[:, :self.members.shape[1]] = self.members
