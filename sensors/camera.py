@@ -90,6 +90,8 @@ class GLRenderer:
 
     def __init__(self, scene: Scene, intrinsics: Intrinsics, rgb: bool = False, people: bool = True,
                  range_max: float = np.inf, fixed: bool = False):
+        if fixed and people:
+            raise ValueError("a fixed camera's renderer draws no people (they would stay as drawn first)")
         self.backend = os.environ.get("MUJOCO_GL", "glfw")
         self.scene = scene
         self.intrinsics = intrinsics
@@ -102,8 +104,6 @@ class GLRenderer:
         self.people = people
         self.rgb = rgb
         self.range_max = range_max  # nothing wholly farther than this (z-depth) is drawn
-        if fixed and people:
-            raise ValueError("a fixed camera's renderer draws no people (they would stay as drawn first)")
         self.fixed = fixed
         self.camera = mujoco.MjvCamera()
         self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED

@@ -306,3 +306,13 @@ def test_shading_by_the_angle_to_the_eye():
     normal = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-np.sqrt(0.5), np.sqrt(0.5), 0.0]])
     view = np.array([[2.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
     np.testing.assert_array_equal(shade(colour, normal, view), [[127, 255, 51], [44, 89, 17], [103, 206, 41]])
+
+
+def test_a_fixed_renderer_refuses_people():
+    # people drawn into a world drawn once would stay where they were first drawn
+    scene = Scene(np.array(WALL_X, float), 0.425, 1, wall_cameras=[WALL_CAM])
+    k = Intrinsics(320, 240, 50.0)
+    with pytest.raises(ValueError, match="no people"):
+        RaycastRenderer(scene, k, people=True, fixed=True)
+    with pytest.raises(ValueError, match="no people"):
+        GLRenderer(scene, k, people=True, fixed=True)
