@@ -234,8 +234,8 @@ class GLRenderer:
         return out
 
     def _z(self, b: np.ndarray) -> np.ndarray:
-        """z-depth in metres (inf where nothing was drawn) of OpenGL depth buffer values b in [0, 1], which are 1/z
-        mapped from [1/near, 1/far]: z = near far / (far - b (far - near)); b = 1 where nothing was drawn."""
+        """z-depth in metres of OpenGL depth buffer values b in [0, 1], which are 1/z mapped from [1/near, 1/far]:
+        z = near far / (far - b (far - near)); inf where nothing was drawn (b = 1)."""
         m = self.scene.model
         near, far = m.vis.map.znear * m.stat.extent, m.vis.map.zfar * m.stat.extent
         b = b.astype(np.float64)
