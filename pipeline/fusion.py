@@ -6,8 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.distance import cdist
 
+from .compiled import kernel
 from .frames import rotate_covariances, rotation, transform_points
 from .params import param
 from .types import DetectedPersons
@@ -41,27 +41,10 @@ def fuse(batches: dict[str, DetectedPersons], distance: float, first_id: int = 0
     cov = np.concatenate([b.covariance for b in batches])
     conf = np.concatenate([b.confidence for b in batches])
     origin = np.concatenate([np.full(len(b), k) for k, b in enumerate(batches)])
-    n = len(pos)
-    owner = np.arange(n)
-    if n > 1 and len(batches) > 1:
-        d = cdist(pos[:, :2], pos[:, :2])
-        d[origin[:, None] == origin[None, :]] = np.inf
-        i, j = np.nonzero(np.triu(d < distance, 1))
-        used = np.zeros(n, bool)
-        for k in np.argsort(d[i, j], kind="stable"):  # greedy, nearest pair first; only overlap pairs loop here
-            a, b = i[k], j[k]
-            if not used[a] and not used[b]:
-                used[a] = used[b] = True
-                owner[b] = a
-    _, inv = np.unique(owner, return_inverse=True)
-    m = inv.max() + 1 if n else 0
-    count = np.bincount(inv, minlength=m).astype(float)
-    fused_pos = np.stack([np.bincount(inv, pos[:, k], m) for k in range(3)], 1) / np.maximum(count, 1)[:, None]
-    fused_cov = np.zeros((m, 3, 3))
-    np.add.at(fused_cov, inv, cov)
-    fused_cov /= np.maximum(count, 1)[:, None, None] ** 2  # variance of the mean of independent estimates
-    fused_conf = np.zeros(m)
-    np.maximum.at(fused_conf, inv, conf)
+    inv, count, fused_pos, fused_cov, fused_conf = _merged(
+        np.ascontiguousarray(pos, np.float64), np.ascontiguousarray(cov, np.float64),
+        np.ascontiguousarray(conf, np.float64), origin, float(distance))
+    m = len(count)
     ids = np.arange(first_id, first_id + m, dtype=np.int64)
     modality = "+".join(sorted({b.modality for b in batches}))
     originals = {}
@@ -71,6 +54,55 @@ def fuse(batches: dict[str, DetectedPersons], distance: float, first_id: int = 0
     stamp = max(b.stamp for b in batches)
     return DetectedPersons(stamp, batches[0].frame, modality, ids, fused_pos, fused_cov, fused_conf, originals,
                            _mean_rows(batches, "height", inv, count), _mean_rows(batches, "appearance", inv, count))
+
+
+@kernel
+def _merged(pos, cov, conf, origin, distance):
+    """``fuse``'s rows: each detection's fused row, and each row's count, mean position, covariance of the mean and
+    largest confidence. Pairs from different batches (``origin``) nearer than ``distance`` on the floor merge
+    greedily, nearest first (ties in the order of the pairs i < j), each detection into one pair at most; rows are
+    numbered by their first detection."""
+    n = len(pos)
+    first, second, gap = np.empty(n * (n - 1) // 2, np.int64), np.empty(n * (n - 1) // 2, np.int64), np.empty(
+        n * (n - 1) // 2)
+    pairs = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            d = np.sqrt((pos[i, 0] - pos[j, 0]) ** 2 + (pos[i, 1] - pos[j, 1]) ** 2)
+            if origin[i] != origin[j] and d < distance:
+                p = pairs  # a stable insertion sort by distance
+                while p > 0 and gap[p - 1] > d:
+                    first[p], second[p], gap[p] = first[p - 1], second[p - 1], gap[p - 1]
+                    p -= 1
+                first[p], second[p], gap[p] = i, j, d
+                pairs += 1
+    owner = np.arange(n)
+    used = np.zeros(n, np.bool_)
+    for p in range(pairs):
+        if not used[first[p]] and not used[second[p]]:
+            used[first[p]] = used[second[p]] = True
+            owner[second[p]] = first[p]
+    row = np.empty(n, np.int64)
+    m = 0
+    for k in range(n):  # an owner comes before what it owns
+        if owner[k] == k:
+            row[k] = m
+            m += 1
+        else:
+            row[k] = row[owner[k]]
+    count, fused_pos = np.zeros(m), np.zeros((m, 3))
+    fused_cov, fused_conf = np.zeros((m, 3, 3)), np.zeros(m)
+    for k in range(n):
+        r = row[k]
+        count[r] += 1.0
+        fused_pos[r] += pos[k]
+        fused_cov[r] += cov[k]
+        if not fused_conf[r] >= conf[k] and not np.isnan(fused_conf[r]):  # numpy's maximum: NaN wins
+            fused_conf[r] = conf[k]
+    for r in range(m):
+        fused_pos[r] /= max(count[r], 1.0)
+        fused_cov[r] /= max(count[r], 1.0) ** 2  # the variance of the mean of independent estimates
+    return row, count, fused_pos, fused_cov, fused_conf
 
 
 def _mean_rows(batches: list[DetectedPersons], name: str, inv: np.ndarray, count: np.ndarray) -> np.ndarray | None:

@@ -161,3 +161,16 @@ def test_to_frame_turns_the_full_covariance():
     np.testing.assert_allclose(out.covariance[0], rot @ cov @ rot.T, atol=1e-12)
     # by hand: x-x and y-y swap, the x-z term moves to y-z
     np.testing.assert_allclose(out.covariance[0], [[0.01, 0, 0], [0, 0.04, 0.01], [0, 0.01, 0.09]], atol=1e-12)
+
+
+def test_a_tie_goes_to_the_first_pair_and_nan_confidence_stays():
+    # front: (0, 0); rear: (0.3, 0) and (-0.3, 0), both 0.3 from it, and (5, 0) alone. The pairs in order are
+    # (front 0, rear 0) and (front 0, rear 1) at equal distance: the first merges, at (0.15, 0), and rear 1 stays
+    # alone; the merged row's confidence is the larger, rear 1 keeps its NaN (numpy's maximum lets NaN through)
+    fused = fuse({"front": dets([(0.0, 0.0)], conf=[0.6]),
+                  "rear": dets([(0.3, 0.0), (-0.3, 0.0), (5.0, 0.0)], conf=[0.8, np.nan, 0.5])}, 0.4)
+    np.testing.assert_allclose(fused.position[:, :2], [[0.15, 0.0], [-0.3, 0.0], [5.0, 0.0]], atol=1e-12)
+    assert fused.originals["front"].tolist() == [0, -1, -1] and fused.originals["rear"].tolist() == [0, 1, 2]
+    assert fused.confidence[0] == 0.8 and np.isnan(fused.confidence[1]) and fused.confidence[2] == 0.5
+    # the mean of two estimates of variance 0.1 has variance 0.1 / 2; one alone keeps 0.1
+    np.testing.assert_allclose(fused.covariance[:, 0, 0], [0.05, 0.1, 0.1], atol=1e-12)
