@@ -128,10 +128,8 @@ class GLRenderer:
         boxes = np.flatnonzero((m.geom_type == mujoco.mjtGeom.mjGEOM_BOX) & (m.geom_bodyid == 0))
         d = mujoco.MjData(m)  # the world body's geoms placed (the scene may not have been synced yet)
         mujoco.mj_kinematics(m, d)
-        unit = bodycast.UNIT_BOX
         self._walls = boxes
-        self._wall_corners = (d.geom_xpos[boxes][:, None, :] + np.einsum(
-            "nij,nkj->nki", d.geom_xmat[boxes].reshape(-1, 3, 3), unit[None] * m.geom_size[boxes][:, None, :]))
+        self._wall_corners = geom_box_corners(m, d, boxes)
         self.ids = mujoco.MjvScene(m, maxgeom=m.ngeom + 100)
         self.colour = mujoco.MjvScene(m, maxgeom=m.ngeom + 100) if self.rgb else None
         for sc in (self.ids, self.colour):
@@ -275,16 +273,21 @@ class GLRenderer:
         return out
 
 
+def geom_box_corners(m: mujoco.MjModel, d: mujoco.MjData, geoms: np.ndarray) -> np.ndarray:
+    """The corners [n, 8, 3] in the world of the bounding boxes of ``geoms`` (MuJoCo's ``geom_aabb``, in each geom's
+    frame; a box geom's is the box)."""
+    aabb = m.geom_aabb[geoms]  # centre and half sizes
+    local = aabb[:, None, :3] + bodycast.UNIT_BOX[None] * aabb[:, None, 3:]
+    return d.geom_xpos[geoms][:, None] + np.einsum("nij,nkj->nki", d.geom_xmat[geoms].reshape(-1, 3, 3), local)
+
+
 def robot_box(scene: Scene, camera: str, intrinsics: Intrinsics) -> tuple[int, int, int, int] | None:
     """The pixels [u0, u1) x [v0, v1) the robot can cover in ``camera``: round the projections of its geoms'
     bounding boxes, a pixel wider each side (the whole image when part of a box lies behind the camera); None where
     it lies outside the view."""
     m, d = scene.model, scene.data
     geoms = np.flatnonzero(m.geom_bodyid == scene.robot_body)
-    unit = bodycast.UNIT_BOX
-    aabb = m.geom_aabb[geoms]  # centre and half sizes in each geom's frame
-    local = aabb[:, None, :3] + unit[None] * aabb[:, None, 3:]
-    corners = (d.geom_xpos[geoms][:, None] + np.einsum("nij,nkj->nki", d.geom_xmat[geoms].reshape(-1, 3, 3), local))
+    corners = geom_box_corners(m, d, geoms)
     origin, rot = camera_pose(scene, camera)
     c = ((corners - origin) @ rot).reshape(-1, 3)
     k = intrinsics
