@@ -8,7 +8,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
 from pipeline.frames import compose
@@ -133,9 +132,7 @@ class Laser(Periodic):
     def scan(self, stamp: float, robot_pose: np.ndarray) -> LaserScan:
         """Cast every beam from the laser's true pose; the scene must be synced to the same instant."""
         origin, vec = self.rays(robot_pose)
-        m, d = self.scene.model, self.scene.data
-        mujoco.mj_multiRay(m, d, origin, vec.reshape(-1), self._groups, 1, self.scene.robot_body, self._geom,
-                           self._dist, None, self.n_beams, self.range_max)
+        self.scene.cast(origin, vec, self._groups, self.scene.robot_body, self.range_max, self._geom, self._dist)
         return self.reading(stamp, self._dist, self._geom)
 
     def reading(self, stamp: float, dist: np.ndarray, geom: np.ndarray) -> LaserScan:

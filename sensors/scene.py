@@ -4,6 +4,8 @@ No contact physics runs: bodies are placed every tick and MuJoCo is used for ray
 A person is a torso body (with the head) and two leg bodies (see sensors/body.py). The scene holds only the parts
 its sensors can see (two 70 cm lasers see torsos only): MuJoCo's ray casting tests every geom of the model, so parts
 nobody sees would only cost time. Slots beyond the number alive are parked below the floor and made transparent.
+Rays are cast in a copy of the model with every person's geoms in one body (``Scene.cast``), since MuJoCo's ray loop
+tests each body's bounding sphere before its geoms.
 """
 
 from __future__ import annotations
@@ -66,25 +68,39 @@ def camera_xml(cam: dict) -> str:
     return f'<camera name="{cam["name"]}" pos="{pos}" xyaxes="{axes}" fovy="{cam["fovy_deg"]}"/>'
 
 
-def _person_xml(k: int, parts: set[str]) -> str:
+def _person_geoms(k: int, parts: set[str]) -> tuple[str, str, str]:
+    """The k-th person's geoms: those of the torso body (torso, head and neck), the left leg and the right leg."""
     torso_half = (body.TORSO_TOP - body.TORSO_BOTTOM) / 2
-    xml = f'<body name="person{k}" mocap="true" pos="0 0 {PARKED_Z}">'
+    trunk = ""
     if "torso" in parts:
-        xml += (f'<geom name="person{k}_torso" type="cylinder" size="{body.TORSO_RADIUS} {torso_half:.4f}" '
-                f'pos="0 0 {body.TORSO_BOTTOM + torso_half:.4f}" group="{TORSO_GROUP}" rgba=".8 .5 .3 1"/>')
+        trunk += (f'<geom name="person{k}_torso" type="cylinder" size="{body.TORSO_RADIUS} {torso_half:.4f}" '
+                  f'pos="0 0 {body.TORSO_BOTTOM + torso_half:.4f}" group="{TORSO_GROUP}" rgba=".8 .5 .3 1"/>')
     if "head" in parts:
         neck_half = (body.HEAD_CENTRE - body.TORSO_TOP) / 2
-        xml += (f'<geom name="person{k}_head" type="sphere" size="{body.HEAD_RADIUS}" pos="0 0 {body.HEAD_CENTRE}" '
-                f'group="{HEAD_GROUP}" rgba=".85 .68 .55 1"/>'
-                f'<geom name="person{k}_neck" type="cylinder" size="{body.NECK_RADIUS} {neck_half:.4f}" '
-                f'pos="0 0 {body.TORSO_TOP + neck_half:.4f}" group="{HEAD_GROUP}" rgba=".85 .68 .55 1"/>')
-    xml += "</body>"
-    if "legs" in parts:
-        for side in ("left", "right"):
-            xml += (f'<body name="person{k}_{side}_leg" mocap="true" pos="0 0 {PARKED_Z}">'
-                    f'<geom name="person{k}_{side}_leg" type="capsule" fromto="0 0 0 0 0 {-body.LEG_LENGTH:.4f}" '
-                    f'size="{body.LEG_RADIUS}" group="{LEG_GROUP}" rgba=".2 .2 .3 1"/></body>')
+        trunk += (f'<geom name="person{k}_head" type="sphere" size="{body.HEAD_RADIUS}" pos="0 0 {body.HEAD_CENTRE}" '
+                  f'group="{HEAD_GROUP}" rgba=".85 .68 .55 1"/>'
+                  f'<geom name="person{k}_neck" type="cylinder" size="{body.NECK_RADIUS} {neck_half:.4f}" '
+                  f'pos="0 0 {body.TORSO_TOP + neck_half:.4f}" group="{HEAD_GROUP}" rgba=".85 .68 .55 1"/>')
+    legs = [f'<geom name="person{k}_{side}_leg" type="capsule" fromto="0 0 0 0 0 {-body.LEG_LENGTH:.4f}" '
+            f'size="{body.LEG_RADIUS}" group="{LEG_GROUP}" rgba=".2 .2 .3 1"/>' if "legs" in parts else ""
+            for side in ("left", "right")]
+    return trunk, legs[0], legs[1]
+
+
+def _person_xml(k: int, parts: set[str]) -> str:
+    """The k-th person as mocap bodies: the torso (with the head) and, with legs, one body per leg."""
+    trunk, left, right = _person_geoms(k, parts)
+    xml = f'<body name="person{k}" mocap="true" pos="0 0 {PARKED_Z}">{trunk}</body>'
+    for side, leg in (("left", left), ("right", right)):
+        if leg:
+            xml += f'<body name="person{k}_{side}_leg" mocap="true" pos="0 0 {PARKED_Z}">{leg}</body>'
     return xml
+
+
+def _crowd_xml(capacity: int, parts: set[str]) -> str:
+    """Every person's geoms in one body, in the order ``_person_xml`` gives them (so with the same geom ids)."""
+    return ('<body name="crowd" mocap="true">' + "".join("".join(_person_geoms(k, parts)) for k in range(capacity))
+            + "</body>")
 
 
 class Scene:
@@ -112,7 +128,6 @@ class Scene:
         walls, robot_radius, robot_cameras, wall_cameras = self._layout
         self.capacity = capacity
         self.version += 1
-        persons = "\n".join(_person_xml(k, self.parts) for k in range(capacity))
         cameras = [*robot_cameras, *wall_cameras]
         # a floor as big as the map plus a margin (an infinite plane costs a third of a camera image under Mesa)
         corners = np.asarray(walls, float).reshape(-1, 2) if len(walls) else np.zeros((1, 2))
@@ -123,7 +138,7 @@ class Scene:
         # the floor (for cameras; horizontal laser rays never meet it) and a light from above; offscreen buffers as
         # big as the biggest camera, no multisampling, a coarse tessellation (16 sides: a cylinder's outline within
         # 2% of its width)
-        xml = f"""<mujoco model="crowdsim">
+        self._xml = f"""<mujoco model="crowdsim">
   <option timestep="0.04"/>
   <visual>
     <global offwidth="{width}" offheight="{height}"/>
@@ -144,10 +159,12 @@ class Scene:
             pos="0 0 {(ROBOT_HEIGHT + ROBOT_HEAD_BOTTOM) / 2}" group="{ROBOT_GROUP}" rgba=".85 .85 .88 1"/>
       {"".join(camera_xml(c) for c in robot_cameras)}
     </body>
-    {persons}
+    {{persons}}
   </worldbody>
 </mujoco>"""
-        m = self.model = mujoco.MjModel.from_xml_string(xml)
+        m = self.model = mujoco.MjModel.from_xml_string(
+            self._xml.replace("{persons}", "\n".join(_person_xml(k, self.parts) for k in range(capacity))))
+        self._cast_model, self._cast_synced = None, False  # made at the first cast
         self.data = mujoco.MjData(m)
         self.robot_body = m.body("robot").id
         self.robot_mocap = m.body_mocapid[self.robot_body]
@@ -178,7 +195,7 @@ class Scene:
         self.slot_person_id = np.full(capacity, -1, np.int64)
         self.alive = 0
         self.person_xy = np.zeros((capacity, 2))
-        self.hips = np.zeros((capacity, 2, 3))  # hip joints and leg ends, kept for the cameras' silhouettes
+        self.hips = np.zeros((capacity, 2, 3))  # hip joints and leg ends for the cameras' silhouettes (with legs)
         self.feet = np.zeros((capacity, 2, 3))
         self.data.mocap_pos[self._torso_mocap, 2] = PARKED_Z
         self.data.mocap_pos[self._leg_mocap.ravel(), 2] = PARKED_Z
@@ -221,11 +238,15 @@ class Scene:
         scale = np.ones(n) if person_scale is None else np.asarray(person_scale, float)
         if (scale < body.MIN_SCALE - 1e-9).any() or (scale > body.MAX_SCALE + 1e-9).any():
             raise ValueError(f"body scales must lie in [{body.MIN_SCALE}, {body.MAX_SCALE}]")
-        swing = body.leg_swing(walked, np.linalg.norm(vel, axis=1), scale)
-        hips, leg_quat = body.leg_poses(xy, heading, swing, scale)
         self.alive = n
-        self.person_xy[:n], self.hips[:n] = xy, hips
-        self.feet[:n], self.person_scale[:n] = body.feet(hips, heading, swing, scale), scale
+        self.person_xy[:n], self.person_scale[:n] = xy, scale
+        if "legs" in self.parts:  # the legs' poses, and the hips and feet the cameras' silhouettes are cast from
+            swing = body.leg_swing(walked, np.linalg.norm(vel, axis=1), scale)
+            hips, leg_quat = body.leg_poses(xy, heading, swing, scale)
+            self.hips[:n], self.feet[:n] = hips, body.feet(hips, heading, swing, scale)
+            legs = self._leg_mocap[:n]
+            d.mocap_pos[legs], d.mocap_quat[legs] = hips, leg_quat
+            d.mocap_pos[self._leg_mocap[n:].ravel()] = (0.0, 0.0, PARKED_Z)
         # each body at its own size: MuJoCo reads geom sizes and positions each draw and ray cast, and culls rays
         # by the bounding radii and boxes, which scale with them
         g, k = self._all_person_geoms[:n], scale[:, None, None]
@@ -233,16 +254,15 @@ class Scene:
         m.geom_pos[g] = self._base[1][:n] * k
         m.geom_rbound[g] = self._base[2][:n] * scale[:, None]
         m.geom_aabb[g] = self._base[3][:n] * k
-        if "legs" in self.parts:
-            legs = self._leg_mocap[:n]
-            d.mocap_pos[legs], d.mocap_quat[legs] = hips, leg_quat
-            d.mocap_pos[self._leg_mocap[n:].ravel()] = (0.0, 0.0, PARKED_Z)
-        # clothing colours; MuJoCo's ray casting skips geoms with alpha 0, so parked slots cost less per beam
-        top, trousers = body.clothing(person_ids)
-        for part, colour in (("torso", top), ("head", body.SKIN), ("legs", trousers)):
-            if part in self._geom:
-                g = self._geom[part][:n]
-                m.geom_rgba[g, :3] = colour[:, None] if g.ndim == 2 and colour.ndim == 2 else colour
+        # clothing colours, written where a slot's person changed; MuJoCo's ray casting skips geoms with alpha 0, so
+        # parked slots cost less per beam
+        new = np.flatnonzero(self.slot_person_id[:n] != person_ids)
+        if len(new):
+            top, trousers = body.clothing(np.asarray(person_ids)[new])
+            for part, colour in (("torso", top), ("head", body.SKIN), ("legs", trousers)):
+                if part in self._geom:
+                    g = self._geom[part][new]
+                    m.geom_rgba[g, :3] = colour[:, None] if g.ndim == 2 and colour.ndim == 2 else colour
         m.geom_rgba[self._all_person_geoms[:n].ravel(), 3] = 1.0
         m.geom_rgba[self._all_person_geoms[n:].ravel(), 3] = 0.0
         self.slot_person_id[:n] = person_ids
@@ -250,6 +270,55 @@ class Scene:
         mujoco.mj_kinematics(m, d)
         if m.ncam:
             mujoco.mj_camlight(m, d)  # camera poses, which mj_kinematics leaves alone
+        self._cast_synced = False
+
+    def cast(self, origin: np.ndarray, directions: np.ndarray, groups: np.ndarray, exclude_body: int, cutoff: float,
+             geom: np.ndarray, dist: np.ndarray, normal: np.ndarray | None = None) -> None:
+        """MuJoCo's ``mj_multiRay`` from ``origin`` along ``directions`` [n, 3] in the scene as last synced: into
+        ``geom`` (int32, -1: no hit), ``dist`` (-1: no hit) and ``normal`` [3 n] where given.
+
+        Why not the scene's own model: MuJoCo's ray loop first tests every ray against every body's bounding sphere,
+        and a person is one to three bodies: in the airport at 15 s (170 bodies) a scan cost 430-460 us, 240-280 us
+        here. The cast is made in a copy of the model whose persons' geoms are all in one body ("crowd"), with
+        the geoms' poses, sizes, bounds and colours copied from the scene: the same geoms in the same order, each
+        tested against the ray by MuJoCo with the same numbers. The crowd body's bounding box is set to hold every
+        person alive, so it culls only rays that miss them all. (The scene model's body spheres are those MuJoCo
+        compiled for the adult body: a person scaled by ``sync`` can poke out of them, and rays in 3D then missed
+        them there. tests/test_laser.py checks these hits against ``mj_ray``, which tests every geom.)"""
+        if self._cast_model is None:
+            self._make_cast_model()
+        cm, cd = self._cast_model, self._cast_data
+        if not self._cast_synced:
+            m, d = self.model, self.data
+            np.copyto(cd.geom_xpos, d.geom_xpos)
+            np.copyto(cd.geom_xmat, d.geom_xmat)
+            np.copyto(cd.xipos[:self.robot_body + 1], d.xipos[:self.robot_body + 1])
+            for field in ("geom_size", "geom_rbound", "geom_aabb", "geom_rgba"):
+                np.copyto(getattr(cm, field), getattr(m, field))
+            alive = self._all_person_geoms[:self.alive].ravel()
+            if len(alive):
+                reach = m.geom_rbound[alive, None]
+                lo = (d.geom_xpos[alive] - reach).min(axis=0)
+                hi = (d.geom_xpos[alive] + reach).max(axis=0)
+                centre = (lo + hi) / 2 - cd.xipos[self._crowd_body]  # MuJoCo adds the body's xipos
+                cm.bvh_aabb[self._crowd_bvh] = np.concatenate([centre, (hi - lo) / 2])
+            self._cast_synced = True
+        mujoco.mj_multiRay(cm, cd, origin, directions.reshape(-1), groups, 1, exclude_body, geom, dist, normal,
+                           len(dist), cutoff)
+
+    def _make_cast_model(self) -> None:
+        """The model ``cast`` uses: this one with every person's geoms in the body "crowd", the same geom ids."""
+        m = self.model
+        cm = self._cast_model = mujoco.MjModel.from_xml_string(
+            self._xml.replace("{persons}", _crowd_xml(self.capacity, self.parts)))
+        self._cast_data = mujoco.MjData(cm)
+        mujoco.mj_kinematics(cm, self._cast_data)
+        self._crowd_body = cm.body("crowd").id
+        self._crowd_bvh = cm.body_bvhadr[self._crowd_body]
+        if (cm.ngeom != m.ngeom or cm.body("robot").id != self.robot_body
+                or any(cm.geom(i).name != m.geom(i).name for i in range(m.ngeom))):
+            raise AssertionError("the cast model's geoms or robot differ from the scene's")
+        self._cast_synced = False
 
     def slots_of(self, person_ids: np.ndarray) -> np.ndarray:
         """The slots that hold these persons (each must be alive)."""

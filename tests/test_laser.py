@@ -272,3 +272,50 @@ def test_sync_grows_past_capacity_when_more_persons_are_alive():
     scene = Scene(np.array([FRONT_WALL], float), 0.425, 2)
     scene.sync(np.zeros(3), np.arange(3), np.array([[1.0, 1.0], [2.0, 1.0], [3.0, 1.0]]))
     assert (scene.capacity, scene.alive) == (3, 3)
+
+
+def _ray_by_ray(scene, origin, vec, groups, exclude):
+    """MuJoCo's ``mj_ray`` in the scene's own model, one ray at a time: it tests every geom, with no bounding
+    volumes (its ``mj_multiRay`` culls by each body's bounding sphere as compiled, which a person scaled by ``sync``
+    can poke out of)."""
+    geom, dist, one = np.zeros(len(vec), np.int32), np.zeros(len(vec)), np.zeros(1, np.int32)
+    for k, v in enumerate(vec):
+        d = mujoco.mj_ray(scene.model, scene.data, origin, v, groups, 1, exclude, one)
+        geom[k], dist[k] = one[0], d
+    return geom, dist
+
+
+def test_the_cast_model_gives_mujocos_own_hits_and_follows_each_sync():
+    # Scene.cast casts in a copy with all persons' geoms in one body: the same geom ids, poses and sizes, so the same
+    # hits to the bit as MuJoCo's exhaustive mj_ray. Persons of every size, some beyond the walls, parked slots, a
+    # model grown past its capacity, and rays in 3D (a camera's) as well as a laser's flat fans.
+    rng = np.random.default_rng(4)
+    scene = Scene(np.array([FRONT_WALL, REAR_WALL], float), 0.425, 40, initial_capacity=4)
+    a = np.linspace(-np.pi, np.pi, 721)
+    flat = np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], 1)
+    tilted = np.stack([np.cos(a), np.sin(a), rng.uniform(-0.6, 0.6, a.size)], 1)
+    hits = 0
+    for n in (3, 9, 30, 0, 12):  # 9 and 30 grow the model; 0 parks everyone
+        scene.sync(np.array([0.3, -0.2, 0.4]), np.arange(n) + 7, rng.uniform(-8.0, 8.0, (n, 2)),
+                   rng.normal(0, 1, (n, 2)), rng.uniform(0, 9, n), rng.uniform(0.65, 1.05, n))
+        for vec, z in ((flat, 0.70), (tilted, 1.2), (flat, 0.30)):
+            origin, groups = np.array([0.5, -0.1, z]), np.ones(6, np.uint8)
+            expected = _ray_by_ray(scene, origin, vec, groups, scene.robot_body)
+            geom, dist = np.zeros(len(vec), np.int32), np.zeros(len(vec))
+            scene.cast(origin, vec, groups, scene.robot_body, 1e4, geom, dist)  # a cutoff beyond everything
+            np.testing.assert_array_equal(geom, expected[0])
+            np.testing.assert_array_equal(dist, expected[1])
+            hits += (scene.person_of_geom(geom) >= 0).sum()
+    assert hits > 300  # 451: persons were hit, not only walls
+
+
+def test_a_cast_after_a_sync_sees_the_persons_new_places():
+    # hand-worked: an adult on the beam along +x at 3 m, then at 6 m: the torso's face at 3 - 0.18, then 6 - 0.18
+    scene = Scene(np.zeros((0, 2, 2)), 0.425, 2)
+    vec = np.array([[1.0, 0.0, 0.0]])
+    geom, dist = np.zeros(1, np.int32), np.zeros(1)
+    for x in (3.0, 6.0):
+        scene.sync(np.array([-5.0, 0.0, 0.0]), np.array([1]), np.array([[x, 0.0]]))
+        scene.cast(np.zeros(3) + [0.0, 0.0, 0.7], vec, np.ones(6, np.uint8), scene.robot_body, 20.0, geom, dist)
+        assert dist[0] == pytest.approx(x - PERSON_HIP_RADIUS, abs=1e-12)
+        assert scene.person_of_geom(geom)[0] == 1
