@@ -25,10 +25,11 @@ from pipeline.types import CameraFrame, DepthFrame
 
 from . import body, bodycast
 from .base import Periodic
-from .scene import LEG_GROUP, ROBOT_GROUP, STATIC_GROUP, TORSO_GROUP, Scene
+from .scene import LEG_GROUP, PARTS, ROBOT_GROUP, STATIC_GROUP, TORSO_GROUP, Scene
 
 MUJOCO_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])  # MuJoCo camera axes (x right, y up, z back) -> optical
 NEAR_CLIP, FAR_CLIP = 0.05, 200.0  # m, the GL clipping planes
+OBJ_GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)  # a segmentation colour's object type when it shows a geom
 
 
 @dataclass(frozen=True)
@@ -223,12 +224,14 @@ class GLRenderer:
         if segmentation:
             code = self._seg[::-1].astype(np.int64)
             segid = code[..., 0] + (code[..., 1] << 8) + (code[..., 2] << 16)  # 0: background, k + 1: geom k
-            lookup = np.full(self.ids.ngeom + 1, -1, np.int64)
-            for k in range(self.ids.ngeom):
-                g = self.ids.geoms[k]
-                if g.segid >= 0 and g.objtype == mujoco.mjtObj.mjOBJ_GEOM:
-                    lookup[g.segid + 1] = g.objid
-            out["geom"] = lookup[np.minimum(segid, self.ids.ngeom)]
+            n = self.ids.ngeom
+            # the scene's geoms' (segid, object type, object id), read in one pass: each attribute read through the
+            # bindings costs about 0.1 us, and comparing with MuJoCo's enum 1 us (176 us a frame before, 48 now)
+            found = np.array([(g.segid, int(g.objtype), g.objid) for g in self.ids.geoms[:n]], np.int64).reshape(-1, 3)
+            drawn = (found[:, 0] >= 0) & (found[:, 1] == OBJ_GEOM)
+            lookup = np.full(n + 1, -1, np.int64)
+            lookup[found[drawn, 0] + 1] = found[drawn, 2]
+            out["geom"] = lookup[np.minimum(segid, n)]
         return out
 
     def _z(self, b: np.ndarray) -> np.ndarray:
@@ -330,8 +333,7 @@ class RaycastRenderer:
         """Geom, distance (-1: no hit) and normal [n, 3] of each ray."""
         n = len(vec)
         geom, dist, normal = np.zeros(n, np.int32), np.zeros(n), np.zeros(3 * n)
-        mujoco.mj_multiRay(self.scene.model, self.scene.data, origin, vec.ravel(), groups, 1, self.exclude_body, geom,
-                           dist, normal, n, 1e4)
+        self.scene.cast(origin, vec, groups, self.exclude_body, 1e4, geom, dist, normal)
         return geom, dist, normal.reshape(-1, 3)
 
     def _over_static(self, camera: str, origin: np.ndarray, vec: np.ndarray):
@@ -647,6 +649,9 @@ def person_pixels(scene: Scene, camera: str, intrinsics: Intrinsics, slots: np.n
     work for someone right in front of the lens) every other row and column, each counting four. The hits come
     by owner, then row by row.
     """
+    if set(scene.parts) != set(PARTS):
+        raise ValueError(f"people's silhouettes are cast in a scene with every body part {PARTS}, "
+                         f"not {sorted(scene.parts)}")
     k = intrinsics
     origin, rot = camera_pose(scene, camera)
     slots = np.asarray(slots, np.int64)
