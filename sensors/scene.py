@@ -232,11 +232,11 @@ class Scene:
         heading = np.arctan2(vel[:, 1], vel[:, 0])
         torso, parked = self._torso_mocap[:n], self._torso_mocap[n:]
         d.mocap_pos[torso, :2], d.mocap_pos[torso, 2] = xy, 0.0
-        d.mocap_quat[torso] = np.stack([np.cos(heading / 2), np.zeros(n), np.zeros(n), np.sin(heading / 2)], 1)
+        d.mocap_quat[torso, 0], d.mocap_quat[torso, 3] = np.cos(heading / 2), np.sin(heading / 2)  # x, y stay 0
         d.mocap_pos[parked] = (0.0, 0.0, PARKED_Z)
         walked = np.zeros(n) if person_walked is None else np.asarray(person_walked, float)
         scale = np.ones(n) if person_scale is None else np.asarray(person_scale, float)
-        if (scale < body.MIN_SCALE - 1e-9).any() or (scale > body.MAX_SCALE + 1e-9).any():
+        if n and (scale.min() < body.MIN_SCALE - 1e-9 or scale.max() > body.MAX_SCALE + 1e-9):
             raise ValueError(f"body scales must lie in [{body.MIN_SCALE}, {body.MAX_SCALE}]")
         self.alive = n
         self.person_xy[:n], self.person_scale[:n] = xy, scale
