@@ -46,12 +46,28 @@ class LaserScan:
         only (the detector, the driver's clearance and the ground truth each ask; a scan is not changed once made)."""
         points = self.__dict__.get("_points")
         if points is None:
-            a = self.angles
+            cos, sin = _beam_directions(self.angle_min, self.angle_increment, self.ranges.size)
             r = np.where(self.returned, self.ranges, np.nan)
-            points = np.stack([r * np.cos(a), r * np.sin(a)], axis=1)
+            points = np.stack([r * cos, r * sin], axis=1)
             points.flags.writeable = False
             self._points = points
         return points
+
+
+_DIRECTIONS: dict[tuple[float, float, int], tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _beam_directions(angle_min: float, angle_increment: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """cos and sin [n] of a laser's beam angles, made once per beam layout (a laser's scans all share one)."""
+    key = (float(angle_min), float(angle_increment), int(n))
+    if key not in _DIRECTIONS:
+        if len(_DIRECTIONS) >= 64:  # bounded: a layout per laser, a few lasers a run
+            _DIRECTIONS.clear()
+        a = angle_min + angle_increment * np.arange(n)
+        cos, sin = np.cos(a), np.sin(a)
+        cos.flags.writeable = sin.flags.writeable = False
+        _DIRECTIONS[key] = cos, sin
+    return _DIRECTIONS[key]
 
 
 @dataclass

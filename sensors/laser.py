@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.compiled import kernel
 from pipeline.frames import compose
 from pipeline.params import REQUIRED, param
 from pipeline.types import LaserScan
@@ -138,18 +139,34 @@ class Laser(Periodic):
     def reading(self, stamp: float, dist: np.ndarray, geom: np.ndarray) -> LaserScan:
         """The scan from the beams' true distances (-1 or beyond range: no return) and hit geoms: range errors,
         range limits, the no-return value and the ground-truth person per beam."""
-        hit = (dist >= self.range_min) & (dist <= self.range_max)
-        ranges = dist + self.range_error(dist)
-        ranges = np.where(hit, np.clip(ranges, self.range_min, self.range_max),
-                          np.nan if self.no_return == "nan" else self.range_max)
-        person = np.where(hit, self.scene.person_of_geom(geom), -1)
+        noise = self.rng.standard_normal(self.n_beams)
+        ranges, person = np.empty(self.n_beams), np.empty(self.n_beams, np.int64)
+        scene = self.scene
+        _reading(dist, geom, noise, self._band_edges, self._statistical, self._systematic * self._bias_share,
+                 self.range_min, self.range_max, np.nan if self.no_return == "nan" else self.range_max,
+                 scene._geom_slot, scene.slot_person_id, ranges, person)
         return LaserScan(stamp, self.name, self.angle_min, self.angle_increment, self.range_max, ranges, person)
 
-    def range_error(self, true_range: np.ndarray) -> np.ndarray:
-        """Each beam's error at these true ranges: the laser's offset plus fresh Gaussian noise, by range band."""
-        band = np.searchsorted(self._band_edges, true_range)
-        noise = self.rng.standard_normal(self.n_beams) * self._statistical[band]
-        return noise + self._bias_share * self._systematic[band]
+
+@kernel
+def _reading(dist, geom, noise, band_edges, statistical, offset, range_min, range_max, no_return, geom_slot,
+             slot_person, ranges, person):
+    """Each beam's reading: its true distance plus the error of its range band (the first band whose upper edge is
+    not below the distance; fresh noise times the band's statistical error, plus the laser's offset within its
+    systematic error), clipped to the range limits; ``no_return`` where the beam met nothing within them. The
+    person it hit from the geom (-1 for walls, the robot or nothing)."""
+    for i in range(len(dist)):
+        d = dist[i]
+        if not (range_min <= d <= range_max):
+            ranges[i], person[i] = no_return, -1
+            continue
+        band = 0
+        while band < len(band_edges) and band_edges[band] < d:
+            band += 1
+        r = d + (noise[i] * statistical[band] + offset[band])
+        ranges[i] = min(max(r, range_min), range_max)
+        slot = geom_slot[geom[i]]
+        person[i] = slot_person[slot] if slot >= 0 else -1
 
 
 class LaserArray:

@@ -319,3 +319,19 @@ def test_a_cast_after_a_sync_sees_the_persons_new_places():
         scene.cast(np.zeros(3) + [0.0, 0.0, 0.7], vec, np.ones(6, np.uint8), scene.robot_body, 20.0, geom, dist)
         assert dist[0] == pytest.approx(x - PERSON_HIP_RADIUS, abs=1e-12)
         assert scene.person_of_geom(geom)[0] == 1
+
+
+def test_reading_kernel_bands_clips_and_maps_persons_as_worked_by_hand():
+    from sensors.laser import _reading
+
+    # one band edge at 10 m: up to 10 m statistical 0.01 and offset 0.005, beyond 0.02 and 0.01; range 0.1-20 m
+    dist = np.array([-1.0, 5.0, 10.0, 15.0, 19.99, 25.0, 0.05])
+    geom = np.array([-1, 3, 0, 4, 3, 3, 3], np.int32)
+    noise = np.array([1.0, 1.0, -1.0, 2.0, 10.0, 0.0, 0.0])
+    geom_slot = np.array([-1, -1, -1, 0, 1, -1])  # geoms 3 and 4 are slots 0 and 1; the last entry is geom -1's
+    ranges, person = np.empty(7), np.empty(7, np.int64)
+    _reading(dist, geom, noise, np.array([10.0]), np.array([0.01, 0.02]), np.array([0.005, 0.01]), 0.1, 20.0, np.nan,
+             geom_slot, np.array([41, 42]), ranges, person)
+    expected = [np.nan, 5.0 + (0.01 + 0.005), 10.0 + (-0.01 + 0.005), 15.0 + (0.04 + 0.01), 20.0, np.nan, np.nan]
+    np.testing.assert_array_equal(ranges, expected)  # 10 m is the first band's (edges are upper bounds, inclusive)
+    np.testing.assert_array_equal(person, [-1, 41, -1, 42, 41, -1, -1])
