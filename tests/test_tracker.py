@@ -5,7 +5,7 @@ import pytest
 
 from evaluation import ClearMot
 from pipeline.tracking.association import WINDOWS_FROM, gated_mahalanobis, greedy_assign, mahalanobis
-from pipeline.tracking.imm import kalman_update
+from pipeline.tracking.imm import kalman_update, kalman_update_soa
 from pipeline.tracking.initiation import CountInitiation
 from pipeline.tracking.motion import ConstantVelocity
 from pipeline.tracking.nnt import NearestNeighbourTracker
@@ -149,6 +149,19 @@ def test_kalman_update_hand_worked():
     # log N(nu; 0, S) + log(2 pi) = -(nu^T S^-1 nu + log det S) / 2 = -(20 / 2 + log 4) / 2
     _, _, log_l = kalman_update(np.zeros((1, 4)), P[None], np.array([[2.0, -4.0]]), np.eye(2)[None], True)
     np.testing.assert_allclose(log_l, [-(10.0 + np.log(4.0)) / 2])
+
+
+def test_kalman_update_of_an_imms_models_broadcasts_the_detection():
+    # the IMM's layout: x [d, M, n] with z [2, 1, n]. Model 0 is the hand-worked case above; model 1 has P = I, so
+    # S = 2 I, K = [[.5, 0], [0, .5], [0, 0], [0, 0]]: x+ = (1, -2, 0, 0), P+ = diag(.5, .5, 1, 1)
+    P0 = np.array([[1.0, 0, 0.5, 0], [0, 1.0, 0, 0.5], [0.5, 0, 2.0, 0], [0, 0.5, 0, 2.0]])
+    P = np.stack([P0, np.eye(4)], -1)[..., None]  # [4, 4, 2, 1]
+    x_new, P_new, log_l = kalman_update_soa(np.zeros((4, 2, 1)), P, np.array([2.0, -4.0])[:, None, None],
+                                            np.eye(2)[:, :, None, None], log_likelihood=True)
+    np.testing.assert_allclose(x_new[:, :, 0].T, [[1.0, -2.0, 0.5, -1.0], [1.0, -2.0, 0.0, 0.0]])
+    np.testing.assert_allclose(P_new[:, :, 1, 0], np.diag([0.5, 0.5, 1.0, 1.0]))
+    np.testing.assert_allclose(P_new[:2, :2, 0, 0], 0.5 * np.eye(2))
+    np.testing.assert_allclose(log_l[:, 0], [-(10.0 + np.log(4.0)) / 2] * 2)  # the same S and nu under both
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .motion import INITIAL_VARIANCE, MODELS, layout_with
+from ..compiled import kernel
 from ..params import Slot, made, param
 
 __all__ = ["IMM", "MOTIONS", "MOTION", "as_filter", "kalman_update", "kalman_update_soa"]
@@ -29,25 +30,53 @@ __all__ = ["IMM", "MOTIONS", "MOTION", "as_filter", "kalman_update", "kalman_upd
 
 def kalman_update_soa(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray,
                       log_likelihood: bool = False) -> tuple[np.ndarray, ...]:
-    """Kalman update with one position measurement each, components first: x [d, ...], P [d, d, ...], z [2, ...],
-    R [2, 2, ...] (the trailing axes broadcast).
+    """Kalman update with one position measurement each, components first: x [d, n], P [d, d, n], z [2, n],
+    R [2, 2, n], or an IMM's x [d, M, n], P [d, d, M, n] with z [2, 1 or M, n], R [2, 2, 1 or M, n].
 
     nu = z - H x, S = H P H^T + R, K = P H^T S^-1, x+ = x + K nu, P+ = P - K H P (symmetrized), all written out for
-    H = [I 0] and the 2 x 2 S. Returns new (x+, P+), and with ``log_likelihood`` also log N(nu; 0, S) + log(2 pi),
-    from which the IMM weighs its models.
+    H = [I 0] and the 2 x 2 S (``_kalman``, one compiled pass: numpy's 30 calls on a few tracks cost their overhead).
+    Returns new (x+, P+), and with ``log_likelihood`` also log N(nu; 0, S) + log(2 pi), from which the IMM weighs its
+    models.
     """
-    nu0, nu1 = z[0] - x[0], z[1] - x[1]
-    s00, s01, s10, s11 = P[0, 0] + R[0, 0], P[0, 1] + R[0, 1], P[1, 0] + R[1, 0], P[1, 1] + R[1, 1]
-    det = s00 * s11 - s01 * s10
-    a, b = (s11 * nu0 - s01 * nu1) / det, (s00 * nu1 - s10 * nu0) / det  # S^-1 nu
-    p0, p1 = P[:, 0], P[:, 1]  # the columns of P H^T
-    x_new = x + p0 * a + p1 * b
-    k0, k1 = (p0 * s11 - p1 * s10) / det, (p1 * s00 - p0 * s01) / det  # the columns of K
-    P_new = P - k0[:, None] * P[0][None] - k1[:, None] * P[1][None]
-    P_new = 0.5 * (P_new + P_new.swapaxes(0, 1))
+    models = x.ndim == 3  # x [d, M, n] (an IMM's), else [d, n]
+    x4, P4 = (x, P) if models else (x[:, None], P[:, :, None])
+    z4, R4 = (z, R) if z.ndim == 3 else (z[:, None], R[:, :, None])
+    d, m, n = x4.shape
+    x_new, P_new, quad, det = np.empty((d, m, n)), np.empty((d, d, m, n)), np.empty((m, n)), np.empty((m, n))
+    _kalman(x4, P4, z4, R4, x_new, P_new, quad, det)
+    if not models:
+        x_new, P_new = x_new[:, 0], P_new[:, :, 0]
     if not log_likelihood:
         return x_new, P_new
-    return x_new, P_new, -0.5 * (nu0 * a + nu1 * b + np.log(det))
+    ll = -0.5 * (quad + np.log(det))
+    return x_new, P_new, ll if models else ll[0]
+
+
+@kernel
+def _kalman(x, P, z, R, x_new, P_new, quad, det):
+    """``kalman_update_soa`` of x [d, M, n], P [d, d, M, n] with z [2, 1 or M, n], R [2, 2, 1 or M, n] into x_new,
+    P_new, and the innovation's nu^T S^-1 nu (``quad``) and det S [M, n], each summed in numpy's version's order."""
+    d = x.shape[0]
+    k0, k1, p_raw = np.empty(d), np.empty(d), np.empty((d, d))
+    for m in range(x.shape[1]):
+        mz, mr = min(m, z.shape[1] - 1), min(m, R.shape[2] - 1)
+        for c in range(x.shape[2]):
+            nu0, nu1 = z[0, mz, c] - x[0, m, c], z[1, mz, c] - x[1, m, c]
+            s00, s01 = P[0, 0, m, c] + R[0, 0, mr, c], P[0, 1, m, c] + R[0, 1, mr, c]
+            s10, s11 = P[1, 0, m, c] + R[1, 0, mr, c], P[1, 1, m, c] + R[1, 1, mr, c]
+            dt = s00 * s11 - s01 * s10
+            a, b = (s11 * nu0 - s01 * nu1) / dt, (s00 * nu1 - s10 * nu0) / dt  # S^-1 nu
+            for i in range(d):  # P H^T's columns are P[:, 0] and P[:, 1]
+                x_new[i, m, c] = x[i, m, c] + P[i, 0, m, c] * a + P[i, 1, m, c] * b
+                k0[i] = (P[i, 0, m, c] * s11 - P[i, 1, m, c] * s10) / dt  # the columns of K
+                k1[i] = (P[i, 1, m, c] * s00 - P[i, 0, m, c] * s01) / dt
+            for i in range(d):
+                for j in range(d):
+                    p_raw[i, j] = P[i, j, m, c] - k0[i] * P[0, j, m, c] - k1[i] * P[1, j, m, c]
+            for i in range(d):
+                for j in range(d):
+                    P_new[i, j, m, c] = 0.5 * (p_raw[i, j] + p_raw[j, i])
+            quad[m, c], det[m, c] = nu0 * a + nu1 * b, dt
 
 
 def kalman_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray,
