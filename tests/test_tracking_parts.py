@@ -41,6 +41,16 @@ def test_the_three_associations_differ_on_one_cost_matrix():
     assert pairs(*multi_assign(cost, 9.21)) == [(0, 0), (1, 0)]
 
 
+def test_greedy_breaks_ties_by_row_then_column_and_takes_the_later_rows_last():
+    # every allowed pair costs 2 but (2, 0) = 1: (2, 0) first, then the ties in row-major order: (0, 1), (1, 2)
+    cost = np.array([[2.0, 2.0, 2.0], [2.0, 2.0, 2.0], [1.0, 2.0, 2.0]])
+    assert list(zip(*(a.tolist() for a in greedy_assign(cost, 9.21)))) == [(2, 0), (0, 1), (1, 2)]  # as taken
+    # row 2 a later one (a candidate): the others choose first, (0, 0) and (1, 1); row 2 gets what is left, (2, 2)
+    assert pairs(*greedy_assign(cost, 9.21, np.array([False, False, True]))) == [(0, 0), (1, 1), (2, 2)]
+    # NaN and costs beyond the gate are never taken
+    assert pairs(*greedy_assign(np.array([[np.nan, 9.3], [9.21, 0.5]]), 9.21)) == [(1, 1)]
+
+
 def test_global_nn_never_forces_a_far_pair_and_excludes_gated_ones():
     # gate 13.82; (1,1) = 20 is beyond it. Both rows paired: (0,1) + (1,0) = 26; (0,0) alone with row 1 left out
     # costs 1 + 13.82 = 14.82: the better one. A maximum-cardinality assignment would take the 26.

@@ -30,6 +30,7 @@ from typing import ClassVar
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from ..compiled import kernel
 from ..params import param
 
 __all__ = ["ASSOCIATIONS", "GreedyNN", "GlobalNN", "MultiNN", "WINDOWS_FROM", "checked_detections", "mahalanobis",
@@ -128,29 +129,46 @@ def _none() -> tuple[np.ndarray, np.ndarray]:
 
 def greedy_assign(cost: np.ndarray, gate: float, later: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Greedy NN on cost [n, m]: pairs with cost <= gate taken in increasing cost (the ``later`` rows' pairs after all
-    others), each row and column at most once; returned in the order taken. One sort of the allowed pairs and a
-    single walk."""
+    others), each row and column at most once; returned in the order taken. One stable sort of the allowed pairs
+    (ties by row, then column) and a single walk, compiled (``_greedy``)."""
     n, m = cost.shape
     if n == 0 or m == 0:
         return _none()
-    rows, cols = np.nonzero(cost <= gate)  # row-major, so a stable sort breaks ties by (row, col)
-    order = np.argsort(cost[rows, cols], kind="stable")
-    if later is not None:  # then the later rows' pairs behind the others, each part still by cost
-        order = order[np.argsort(later[rows[order]], kind="stable")]
-    row_free = [True] * n
-    col_free = [True] * m
-    out_r: list[int] = []
-    out_c: list[int] = []
-    left = min(n, m)
-    for r, k in zip(rows[order].tolist(), cols[order].tolist()):
-        if row_free[r] and col_free[k]:
-            row_free[r] = col_free[k] = False
-            out_r.append(r)
-            out_c.append(k)
-            left -= 1
-            if left == 0:
+    late = np.zeros(n, np.int64) if later is None else np.asarray(later, np.int64)
+    rows, cols = np.empty(min(n, m), np.int64), np.empty(min(n, m), np.int64)
+    k = _greedy(np.ascontiguousarray(cost, np.float64), float(gate), late, rows, cols)
+    return rows[:k], cols[:k]
+
+
+@kernel
+def _greedy(cost, gate, late, out_r, out_c):
+    """``greedy_assign``'s pairs into out_r, out_c; their number."""
+    n, m = cost.shape
+    pairs = 0
+    for i in range(n):
+        for j in range(m):
+            if cost[i, j] <= gate:
+                pairs += 1
+    rows, cols, value = np.empty(pairs, np.int64), np.empty(pairs, np.int64), np.empty(pairs)
+    p = 0
+    for i in range(n):  # row-major, so the stable sorts break ties by (row, col)
+        for j in range(m):
+            if cost[i, j] <= gate:
+                rows[p], cols[p], value[p] = i, j, cost[i, j]
+                p += 1
+    order = np.argsort(value, kind="mergesort")
+    order = order[np.argsort(late[rows[order]], kind="mergesort")]  # the later rows' pairs behind, still by cost
+    row_free, col_free = np.ones(n, np.bool_), np.ones(m, np.bool_)
+    taken = 0
+    for q in order:
+        r, c = rows[q], cols[q]
+        if row_free[r] and col_free[c]:
+            row_free[r] = col_free[c] = False
+            out_r[taken], out_c[taken] = r, c
+            taken += 1
+            if taken == len(out_r):
                 break
-    return np.asarray(out_r, np.int64), np.asarray(out_c, np.int64)
+    return taken
 
 
 def _then_greedy(assign):
