@@ -15,6 +15,18 @@ def test_voxel_grid_gives_each_cubes_centroid():
     assert voxel_grid(np.zeros((0, 3)), 0.1).shape == (0, 3)
 
 
+def test_voxel_centroids_come_in_the_order_of_the_cubes_coordinates_summed_in_point_order():
+    # 1 m cubes: (0, 1, 0) twice, (0, 0, 5), (-1, 3, 0), (0, 0, 0): ordered by x, then y, then z
+    points = np.array([[0.25, 1.5, 0.5], [0.1, 1.0, 0.0], [0.5, 0.5, 5.5], [-0.5, 3.5, 0.0], [0.0, 0.0, 0.0],
+                       [0.75, 1.5, 0.5]])
+    np.testing.assert_array_equal(voxel_grid(points, 1.0), [[-0.5, 3.5, 0.0], [0.0, 0.0, 0.0], [0.5, 0.5, 5.5],
+                                                            [(0.25 + 0.1 + 0.75) / 3, 4 / 3, 1 / 3]])
+    # in the order of the points: 1 + 1e-16 + 1e-16 is 1, not 1 + 2e-16 (the large one first)
+    tiny = np.array([[1.0, 0, 0], [1e-16, 0, 0], [1e-16, 0, 0]])
+    assert voxel_grid(tiny, 10.0)[0, 0] == 1.0 / 3
+    assert voxel_grid(tiny[::-1], 10.0)[0, 0] == (2e-16 + 1.0) / 3
+
+
 def noisy_room(rng, n_floor=3000, height=1.1, noise=0.01):
     """A camera's points (optical frame: y down) of a floor ``height`` below it, 1-6 m ahead, with ``noise`` sd,
     and a person (a 0.25 m radius cylinder 1.7 m tall) standing on it 3 m ahead."""
@@ -57,9 +69,35 @@ def test_euclidean_clusters_join_points_nearer_than_the_tolerance():
     assert len(euclidean_clusters(points, 0.04)) == 7  # nothing within 4 cm
 
 
+def test_a_pair_at_exactly_the_tolerance_is_joined_as_its_float_squared_distance_says():
+    # as scipy's cKDTree.query_pairs: (dx^2 + dy^2) + dz^2 <= tolerance^2 in float64. 0.1 apart: 0.1^2 <= 0.1^2.
+    # (0.3, 0.4, 1.2) is 1.3 away and 1.69 <= 1.6900000000000002; (0.1, 0.2, 0.2) is 0.3 away, but its squares sum
+    # to 0.09000000000000002 > 0.09
+    assert [c.tolist() for c in euclidean_clusters(np.array([[0.0, 0, 0], [0.1, 0, 0]]), 0.1)] == [[0, 1]]
+    assert len(euclidean_clusters(np.array([[0.0, 0, 0], [0.1, 0, 0]]), np.nextafter(0.1, 0))) == 2
+    assert len(euclidean_clusters(np.array([[0.0, 0, 0], [0.3, 0.4, 1.2]]), 1.3)) == 1
+    assert len(euclidean_clusters(np.array([[5.0, 5, 5], [5.1, 5.2, 5.2]]) - 5, 0.3)) == 2
+
+
+def test_euclidean_clusters_of_equal_size_come_in_the_order_of_their_lowest_point():
+    # a chain 0.9 apart across several 0.52 m cubes, 0.9 m steps two cubes apart, and pairs and a triple 1.5 apart
+    chain = np.column_stack([np.arange(6) * 0.9, np.zeros(6), np.zeros(6)])
+    points = np.concatenate([[[20.0, 0, 0], [20.0, 0.0, 0.9]], chain + [0, 5, 0], [[-7.0, 0, 0], [-7.0, 0.6, 0.6]],
+                             [[3.0, -8.0, 2.0]], [[9.0, 9.0, 9.0], [9.5, 9.5, 9.5]]])
+    clusters = euclidean_clusters(points, 1.0)  # (0.6, 0.6) is 0.85 away; (0.5, 0.5, 0.5) 0.87
+    assert [c.tolist() for c in clusters] == [[2, 3, 4, 5, 6, 7], [0, 1], [8, 9], [11, 12], [10]]
+    assert [c.tolist() for c in euclidean_clusters(points, 0.8)] == [[0], [1], *[[k] for k in range(2, 13)]]
+    assert euclidean_clusters(np.zeros((0, 3)), 1.0) == []
+    assert [c.tolist() for c in euclidean_clusters(np.zeros((3, 3)), 1e-9)] == [[0, 1, 2]]  # one point thrice
+    with pytest.raises(ValueError, match="finite"):
+        euclidean_clusters(np.array([[0.0, 0, 0], [np.nan, 0, 0]]), 1.0)
+    with pytest.raises(ValueError, match="too many cubes"):  # 1e6 m / 0.0577 m along each axis: 5e21 cubes
+        euclidean_clusters(np.array([[0.0, 0, 0], [1e6, 1e6, 1e6]]), 0.1)
+
+
 # --- people candidates (pipeline/detectors/head_clusters.py) --------------------------------------------------------
 
-from pipeline.detectors.head_clusters import ClusterLimits, candidates, heads  # noqa: E402
+from pipeline.detectors.head_clusters import ClusterLimits, candidates, heads, merge_close, subclusters  # noqa: E402
 
 FLOOR = np.array([0.0, -1.0, 0.0, 1.0])  # the camera 1 m up, optical y down: the floor is y = 1, its normal -y
 
@@ -100,6 +138,45 @@ def test_the_heads_of_a_height_map_keep_apart():
     assert heads(points, heights, FLOOR, ClusterLimits(bin_size=0.1, head_distance=0.5)).tolist() == [0]
 
 
+def test_equal_heights_make_one_head_the_first_point_and_the_left_bin():
+    # bins of 0.1 m: points 0 and 1 share the bin at x 0.05 and are equally high (the first is the bin's), the bin
+    # at x 0.15 is as high (a plateau: its left end is the maximum), x 0.55 is lower but a maximum of its own; the
+    # plateau and the lone head are equally high, the plateau's bin comes first
+    points = np.array([[0.05, -0.8, 3.0], [0.06, -0.8, 3.1], [0.15, -0.8, 3.0], [0.35, 0.0, 3.0], [0.55, -0.7, 3.0],
+                       [0.95, -0.8, 3.0]])
+    heights = points @ FLOOR[:3] + FLOOR[3]
+    assert heads(points, heights, FLOOR, ClusterLimits(bin_size=0.1)).tolist() == [0, 5, 4]
+    # 0.3 m apart is far enough: 0.9 apart (0 and 5) and 0.5 (0 and 4) are kept; at 0.5 m, 4 is not
+    assert heads(points, heights, FLOOR, ClusterLimits(bin_size=0.1, head_distance=0.5)).tolist() == [0, 5]
+
+
+def test_points_go_to_the_nearest_head_on_the_ground_the_first_of_equals():
+    # bins of 0.125 m (binary fractions: the distances are exact): heads at x -0.25 (1.75 m) and 0.25 (1.625 m), the
+    # bins between lower. The point at x 0 is 0.25 from both (the first, higher head takes it); x -0.125 and 0.125 go
+    # to the head 0.125 away; the one 0.5 m behind the second head is beyond head_distance 0.3: left out
+    rows = [(-0.25, 1.75, 3.0), (0.25, 1.625, 3.0), (0.0, 0.5, 3.0), (0.125, 1.0, 3.0), (0.25, 1.0, 3.5),
+            (-0.125, 1.0, 3.0)]
+    points = np.array([[x, 1.0 - h, z] for x, h, z in rows])
+    heights = points @ FLOOR[:3] + FLOOR[3]
+    index = np.arange(10, 16)
+    limits = ClusterLimits(bin_size=0.125, min_subcluster=0)
+    assert heads(points, heights, FLOOR, limits).tolist() == [0, 1]
+    assert [p.tolist() for p in subclusters(points, heights, FLOOR, limits, index)] == [[10, 12, 15], [11, 13]]
+    limits = ClusterLimits(bin_size=0.125, min_subcluster=2)
+    assert [p.tolist() for p in subclusters(points, heights, FLOOR, limits, index)] == [[10, 12, 15]]  # 2: dropped
+
+
+def test_clusters_whose_centres_are_near_on_the_ground_merge_transitively():
+    # centres on the floor at x 0, 0.35, 0.7 (each within 0.4 of the next, not of the one after) and 2.0; heights
+    # do not count: the second cluster's points are 1 m up
+    points = np.array([[0.0, 1.0, 3.0], [0.1, 1.0, 3.0], [0.3, 0.0, 3.0], [0.4, 0.0, 3.0], [0.7, 1.0, 3.0],
+                       [2.0, 1.0, 3.0], [-0.1, 1.0, 3.0]])
+    clusters = [np.array([5]), np.array([0, 1, 6]), np.array([2, 3]), np.array([4])]
+    merged = merge_close(points, FLOOR, clusters, 0.4)
+    assert [m.tolist() for m in merged] == [[5], [0, 1, 6, 2, 3, 4]]  # each set in the order of its least cluster
+    assert [m.tolist() for m in merge_close(points, FLOOR, clusters, 0.3)] == [[5], [0, 1, 6], [2, 3], [4]]
+
+
 # --- the ground followed, a person's position (pipeline/detectors/ground.py) ---------------------------------------
 
 from pipeline.detectors.ground import GroundTracker, head_position  # noqa: E402
@@ -135,9 +212,18 @@ def test_a_persons_position_is_the_head_centroid_pushed_along_the_ray_onto_the_f
     np.testing.assert_allclose(where[[0, 2]], [0.5, 3.0], atol=0.06)
 
 
+def test_a_persons_position_by_hand():
+    # the floor y = 1; a head 1.7 m high at (0, -0.7, 2.9) and (0, -0.7, 3.1), a shoulder at 1.45 m (below 7/8 of 1.7
+    # = 1.4875) and a knee: the head's centroid (0, -0.7, 3) 0.1 m further along its ray, on the floor
+    points = np.array([[0.0, -0.7, 2.9], [0.2, -0.45, 3.0], [0.0, -0.7, 3.1], [0.0, 0.5, 3.0]])
+    where, height = head_position(points, FLOOR)
+    assert height == pytest.approx(1.7, abs=1e-12)
+    np.testing.assert_allclose(where, [0.0, 1.0, 3.0 * (1 + 0.1 / np.sqrt(0.49 + 9.0))], atol=1e-12)
+
+
 # --- the detector's geometry (pipeline/detectors/rgbd.py) -----------------------------------------------------------
 
-from pipeline.detectors.rgbd import RgbdPeopleDetector, person_box  # noqa: E402
+from pipeline.detectors.rgbd import RgbdPeopleDetector, _pixels_around, person_box  # noqa: E402
 
 
 def test_the_box_that_holds_a_person_from_head_to_ground_by_hand():
@@ -148,6 +234,15 @@ def test_the_box_that_holds_a_person_from_head_to_ground_by_hand():
     box = person_box(k, np.array([[0.0, 1.0, 4.0], [0.5, 1.0, 2.0]]), np.array([0.0, -1.0, 0.0]), np.array([1.7, 1.5]))
     np.testing.assert_allclose(box, [[80 - 42.5 / 4, 42.5, 80 + 42.5 / 4, 85], [105 - 75 / 4, 35, 105 + 75 / 4, 110]],
                                atol=1e-9)
+
+
+def test_a_candidates_colours_are_the_3_by_3_pixels_round_each_point_clipped_to_the_image():
+    rgb = np.arange(4 * 5 * 3, dtype=np.uint8).reshape(4, 5, 3)  # 4 rows, 5 columns
+    # a point at pixel (u 2.5 -> 2, v 1.9 -> 1) and one at the top left corner (u 0.4, v -0.3: both 0)
+    colours = _pixels_around(np.array([[5.0, 3.8, 2.0], [0.8, -0.6, 2.0]]), rgb)
+    rows = [0, 1, 2] * 3 + [0, 0, 1] * 3
+    columns = [1, 1, 1, 2, 2, 2, 3, 3, 3] + [0, 0, 0, 0, 0, 0, 1, 1, 1]  # column by column, each top down
+    np.testing.assert_array_equal(colours, rgb[rows, columns])
 
 
 def test_the_detector_finds_people_standing_side_by_side_and_alone():

@@ -7,11 +7,16 @@ within two voxels of it; at each later frame the plane refitted by least squares
 the last one, when there are at least 300 of them at 6 cm voxels (fewer: the last plane is kept). The paper has the
 user pick the first plane's three points; here RANSAC finds it, held to planes within ``max_tilt`` of ``up`` (the
 camera's mounting gives the up direction in its frame).
+
+A person's head centroid is a kernel (a frame has several people, each a few numpy calls of a few microseconds); the
+heights above the plane stay numpy's, as the plane fit does.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from pipeline.compiled import kernel
 
 from .point_cloud import fit_plane, plane_distance, ransac_plane
 
@@ -55,7 +60,24 @@ def head_position(points: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, fl
     head (the top ``HEAD_SHARE`` of its height) moved ``VIEW_SHIFT`` further along the camera's ray, dropped onto the
     ground; and the candidate's height."""
     heights = plane_distance(points, plane)
-    top = float(heights.max())
-    head = points[heights >= top * (1 - HEAD_SHARE)].mean(axis=0)
-    head = head + VIEW_SHIFT * head / np.linalg.norm(head)
+    head, top = _shifted_head(points, heights)
     return head - plane_distance(head[None], plane)[0] * plane[:3], top
+
+
+@kernel
+def _shifted_head(points, heights):
+    """``head_position``'s head centroid moved along its ray, not yet on the ground, and the highest height: summed
+    in the order of the points, as numpy's mean and norm sum them."""
+    top = heights.max()
+    head, count = np.zeros(3), 0
+    for i in range(len(points)):
+        if heights[i] >= top * (1 - HEAD_SHARE):
+            for k in range(3):
+                head[k] += points[i, k]
+            count += 1
+    for k in range(3):
+        head[k] /= count
+    length = np.sqrt(head[0] * head[0] + head[1] * head[1] + head[2] * head[2])
+    for k in range(3):
+        head[k] += VIEW_SHIFT * head[k] / length
+    return head, top

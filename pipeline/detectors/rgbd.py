@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.compiled import kernel
 from pipeline.params import param
 from pipeline.tracking.online_boost import BINS, colour_histogram, rgb_to_hsv
 from pipeline.types import DepthFrame, DetectedPersons
@@ -43,6 +44,22 @@ def person_box(camera_matrix: np.ndarray, ground: np.ndarray, normal: np.ndarray
     tall = uv[:, 0, 1] - uv[:, 1, 1]
     middle = uv.mean(axis=1)[:, 0]
     return np.column_stack([middle - tall / 4, uv[:, 1, 1], middle + tall / 4, uv[:, 0, 1]])
+
+
+@kernel
+def _pixels_around(uvw, rgb):
+    """The colours [9 n, 3] of the 3 x 3 pixels round each image point ``uvw`` [n, 3] (homogeneous; its pixel the
+    quotient truncated towards zero, as numpy's astype(int)), clipped to the image, column by column."""
+    h, w = rgb.shape[0], rgb.shape[1]
+    colours = np.empty((9 * len(uvw), 3), rgb.dtype)
+    for i in range(len(uvw)):
+        u, v = int(uvw[i, 0] / uvw[i, 2]), int(uvw[i, 1] / uvw[i, 2])
+        for du in range(3):
+            for dv in range(3):
+                row, column = min(max(v + dv - 1, 0), h - 1), min(max(u + du - 1, 0), w - 1)
+                for c in range(3):
+                    colours[9 * i + 3 * du + dv, c] = rgb[row, column, c]
+    return colours
 
 
 def _up_direction(p: dict):
@@ -154,12 +171,7 @@ class RgbdPeopleDetector:
         3 x 3 pixels round each voxel's centroid, about the pixels the voxel holds at a few metres."""
         if frame.rgb is None or frame.camera_matrix is None:
             return np.zeros(BINS ** 3)
-        uvw = points @ frame.camera_matrix.T
-        h, w = frame.rgb.shape[:2]
-        step = np.array([-1, 0, 1])
-        u = np.clip((uvw[:, 0] / uvw[:, 2]).astype(int)[:, None, None] + step[None, :, None], 0, w - 1)
-        v = np.clip((uvw[:, 1] / uvw[:, 2]).astype(int)[:, None, None] + step[None, None, :], 0, h - 1)
-        colours = frame.rgb[v, u].reshape(-1, 3)
+        colours = _pixels_around(points @ frame.camera_matrix.T, frame.rgb)
         return colour_histogram(rgb_to_hsv(colours) if self.colour_space == "hsv" else colours)
 
     def _batch(self, frame: DepthFrame, where, height, confidence, appearance) -> DetectedPersons:
