@@ -20,7 +20,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["by_label", "elementwise", "kernel"]
+__all__ = ["by_label", "elementwise", "kernel", "union_root"]
 
 
 def kernel(fn):
@@ -121,3 +121,13 @@ def by_label(labels, k):
             order[fill[labels[e]]] = e
             fill[labels[e]] += 1
     return start, order
+
+
+@kernel
+def union_root(parent, v):
+    """The root of node ``v`` in a union-find forest (``parent`` [n]), each node on the way pointed at its
+    grandparent (path halving)."""
+    while parent[v] != v:
+        parent[v] = parent[parent[v]]
+        v = parent[v]
+    return v

@@ -46,3 +46,13 @@ def test_by_label_is_a_counting_sort():
     # with k = 2, label 2 is beyond the table and left out as -1 is
     start, order = by_label(np.array([2, -1, 0, 2, 0]), 2)
     assert start.tolist() == [0, 2, 2] and order.tolist() == [2, 4]
+
+
+def test_union_root_finds_the_root_and_halves_the_path():
+    from pipeline.compiled import union_root
+
+    # the chain 3 -> 2 -> 1 -> 0: the root is 0; on the way 3 is pointed at 1 (its grandparent), and 1 stays at 0
+    parent = np.array([0, 0, 1, 2])
+    assert union_root(parent, 3) == 0
+    assert parent.tolist() == [0, 0, 1, 1]
+    assert union_root(parent, 0) == 0

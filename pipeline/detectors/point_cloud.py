@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.compiled import by_label, kernel
+from pipeline.compiled import by_label, kernel, union_root
 
 
 @kernel
@@ -167,20 +167,20 @@ def _clusters(points, tolerance, min_size, max_size):
     parent, limit = np.arange(cubes), tolerance * tolerance
     lowest = np.zeros(len(columns), np.int64)  # per column, the first cube at or past its start: rises with a
     for a in range(cubes):
-        root_a = _root(parent, a)  # only a's set grows while a's neighbours are looked at: its root is kept here
+        root_a = union_root(parent, a)  # only a's set grows while a's neighbours are looked at: its root is kept here
         for k in range(len(columns)):
             while lowest[k] < cubes and cube_keys[lowest[k]] < cube_keys[a] + max(columns[k] - 2, 1):
                 lowest[k] += 1
             b = lowest[k]
             while b < cubes and cube_keys[b] <= cube_keys[a] + columns[k] + 2:
-                root_b = _root(parent, b)
+                root_b = union_root(parent, b)
                 if root_b != root_a and _touch(by_cube, first[a], first[a + 1], first[b], first[b + 1], limit):
                     parent[max(root_a, root_b)] = min(root_a, root_b)
                     root_a = min(root_a, root_b)
                 b += 1
     labels, label_of, count = np.empty(n, np.int64), np.full(cubes, -1), 0
     for i in range(n):  # numbered by their lowest point, as scipy's connected_components numbers them
-        root = _root(parent, cube_of[i])
+        root = union_root(parent, cube_of[i])
         if label_of[root] < 0:
             label_of[root], count = count, count + 1
         labels[i] = label_of[root]
@@ -200,15 +200,6 @@ def _touch(points, a0, a1, b0, b1, limit):
             if dx * dx + dy * dy + dz * dz <= limit:
                 return True
     return False
-
-
-@kernel
-def _root(parent, i):
-    """The root of ``i``'s tree in a union-find forest, halving the path on the way."""
-    while parent[i] != i:
-        parent[i] = parent[parent[i]]
-        i = parent[i]
-    return i
 
 
 def euclidean_clusters(points: np.ndarray, tolerance: float, min_size: int = 1,

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from pipeline.compiled import kernel
+from pipeline.compiled import kernel, union_root
 
 LINKAGES = ("single", "complete", "average")
 
@@ -28,7 +28,7 @@ def components(n, a, b):
     for e in range(len(a)):
         if not (0 <= a[e] < n and 0 <= b[e] < n):
             raise ValueError("edges: expected nodes 0 <= a, b < n")
-        x, y = _root(parent, a[e]), _root(parent, b[e])
+        x, y = union_root(parent, a[e]), union_root(parent, b[e])
         if x < y:
             parent[y] = x
         elif y < x:
@@ -36,22 +36,13 @@ def components(n, a, b):
     labels = np.empty(n, np.int64)
     k = 0
     for v in range(n):
-        r = _root(parent, v)
+        r = union_root(parent, v)
         if r == v:
             labels[v] = k
             k += 1
         else:
             labels[v] = labels[r]
     return labels
-
-
-@kernel
-def _root(parent, v):
-    """The root of node ``v``, each node on the way pointed at its grandparent."""
-    while parent[v] != v:
-        parent[v] = parent[parent[v]]
-        v = parent[v]
-    return v
 
 
 def detect_groups(n: int, i: np.ndarray, j: np.ndarray, strength: np.ndarray, threshold: float = 0.5,
@@ -195,22 +186,22 @@ def cut(first, second, height, n, at):
     made = np.full(n, -1, np.int64)  # per root: the merge that made its cluster
     merges = 0
     while merges < n - 1 and height[merges] <= at:
-        a, b = _root(parent, first[merges]), _root(parent, second[merges])
+        a, b = union_root(parent, first[merges]), union_root(parent, second[merges])
         parent[b] = a
         made[a] = merges
         merges += 1
     part, number = np.empty(n, np.int64), np.full(n, -1, np.int64)  # number: per merge, its cluster's part
     k = 0
     for v in range(n):
-        if made[v] < 0 and _root(parent, v) == v:
+        if made[v] < 0 and union_root(parent, v) == v:
             part[v] = k
             k += 1
     for q in range(merges):
-        if made[_root(parent, first[q])] == q:
+        if made[union_root(parent, first[q])] == q:
             number[q] = k
             k += 1
     for v in range(n):
-        r = _root(parent, v)
+        r = union_root(parent, v)
         if made[r] >= 0:
             part[v] = number[made[r]]
     return part
