@@ -113,13 +113,10 @@ class Laser(Periodic):
     def shown(self, world, scan: LaserScan) -> tuple[np.ndarray, np.ndarray]:
         """The beams that hit each person, and who was within the field of view and range."""
         agents = world.agents()
-        hit = np.searchsorted(agents.id, scan.person_id[scan.person_id >= 0])
-        beams = np.bincount(hit, minlength=len(agents.id)).astype(float)
         pose = self.pose_in(world.robot.pose)
-        rel = agents.position - pose[:2]
-        bearing = np.arctan2(rel[:, 1], rel[:, 0]) - pose[2]
-        in_view = (np.linalg.norm(rel, axis=1) <= self.range_max) & (
-            np.abs(np.arctan2(np.sin(bearing), np.cos(bearing))) <= np.radians(self.fov_deg) / 2)
+        beams, in_view = np.zeros(len(agents.id)), np.empty(len(agents.id), np.bool_)
+        _shown(agents.id, agents.position, scan.person_id, pose[0], pose[1], pose[2], self.range_max,
+               np.radians(self.fov_deg) / 2, beams, in_view)
         return beams, in_view
 
     def rays(self, robot_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -146,6 +143,20 @@ class Laser(Periodic):
                  self.range_min, self.range_max, np.nan if self.no_return == "nan" else self.range_max,
                  scene._geom_slot, scene.slot_person_id, ranges, person)
         return LaserScan(stamp, self.name, self.angle_min, self.angle_increment, self.range_max, ranges, person)
+
+
+@kernel
+def _shown(ids, position, beam_person, x, y, yaw, range_max, half_fov, beams, in_view):
+    """``Laser.shown`` for persons ``ids`` (sorted) at ``position``: each one's count of the beams that hit them, and
+    whether they lie within ``range_max`` of the laser at (x, y) and within ``half_fov`` of its heading ``yaw``."""
+    for b in range(len(beam_person)):
+        if beam_person[b] >= 0:
+            beams[np.searchsorted(ids, beam_person[b])] += 1.0
+    for i in range(len(ids)):
+        rx, ry = position[i, 0] - x, position[i, 1] - y
+        bearing = math.atan2(ry, rx) - yaw
+        in_view[i] = (math.sqrt(rx * rx + ry * ry) <= range_max
+                      and abs(math.atan2(math.sin(bearing), math.cos(bearing))) <= half_fov)
 
 
 @kernel

@@ -4,15 +4,18 @@ No contact physics runs: bodies are placed every tick and MuJoCo is used for ray
 A person is a torso body (with the head) and two leg bodies (see sensors/body.py). The scene holds only the parts
 its sensors can see (two 70 cm lasers see torsos only): MuJoCo's ray casting tests every geom of the model, so parts
 nobody sees would only cost time. Slots beyond the number alive are parked below the floor and made transparent.
-Rays are cast in a copy of the model with every person's geoms in one body (``Scene.cast``), since MuJoCo's ray loop
-tests each body's bounding sphere before its geoms.
+Rays are cast in a copy of the model whose persons are gathered by place into bodies of a few each (``Scene.cast``),
+since MuJoCo's ray loop tests each body's bounding sphere before its geoms.
 """
 
 from __future__ import annotations
 
+import math
+
 import mujoco
 import numpy as np
 
+from pipeline.compiled import kernel
 from pipeline.frames import optical_rotation
 
 from . import body
@@ -33,6 +36,9 @@ PARKED_Z = -50.0
 # airport scan about 0.6 ms. Memory and the model's making follow the persons present, not max_agents
 INITIAL_CAPACITY = 32
 PARTS = ("torso", "head", "legs")
+# persons per body of the cast model (``Scene.cast``): at 15 and 40 s of the airport (93 and 150 alive), an airport
+# scan cost 213 us with every person in one body, 167 us with 8 a body, 172-194 with 4, 6, 12 or 24
+TILE = 8
 # MuJoCo geom groups, so that a ray cast skips the parts a ray at its height cannot meet, and a fixed camera draws
 # the world that never moves apart from the robot (a renderer must turn all groups on: MuJoCo shows groups 0-2 by
 # default)
@@ -97,10 +103,69 @@ def _person_xml(k: int, parts: set[str]) -> str:
     return xml
 
 
-def _crowd_xml(capacity: int, parts: set[str]) -> str:
-    """Every person's geoms in one body, in the order ``_person_xml`` gives them (so with the same geom ids)."""
-    return ('<body name="crowd" mocap="true">' + "".join("".join(_person_geoms(k, parts)) for k in range(capacity))
-            + "</body>")
+def _tiles_xml(capacity: int, parts: set[str]) -> str:
+    """The cast model's persons: ``_tile_count`` bodies of TILE person slots each."""
+    return "".join(f'<body name="tile{b}" mocap="true">' + "".join(
+        "".join(_person_geoms(c, parts)) for c in range(b * TILE, (b + 1) * TILE)) + "</body>"
+        for b in range(_tile_count(capacity)))
+
+
+def _tile_count(capacity: int) -> int:
+    """Bodies enough for ``capacity`` persons cut into tiles (``_tiles``): each band of them leaves at most one tile
+    part-filled, and there are at most sqrt(capacity / TILE) + 1 bands."""
+    full = math.ceil(capacity / TILE)
+    return full + math.ceil(math.sqrt(full)) + 1
+
+
+@kernel
+def _tiles(xy, tile):
+    """The cast slot of each person at ``xy`` [n, 2], so that each body of the cast model (slots
+    b TILE ... (b + 1) TILE - 1) holds persons near each other: the persons cut by x into about sqrt(n / TILE) bands
+    of equal counts, each band by y into tiles of TILE (its last one part-filled). Returns the slots [n] and the
+    number of bodies used."""
+    n = len(xy)
+    bands = max(1, int(round(math.sqrt(math.ceil(n / tile)))))
+    by_x = np.argsort(xy[:, 0], kind="mergesort")
+    slot = np.empty(n, np.int64)
+    body = 0
+    for band in range(bands):
+        lo, hi = band * n // bands, (band + 1) * n // bands
+        members = by_x[lo:hi]
+        by_y = members[np.argsort(xy[members, 1], kind="mergesort")]
+        for k in range(len(by_y)):
+            slot[by_y[k]] = (body + k // tile) * tile + k % tile
+        body += (len(by_y) + tile - 1) // tile
+    return slot, body
+
+
+@kernel
+def _fill_tiles(slot, bodies, scene_geoms, cast_geoms, xpos, xmat, size, rbound, aabb, rgba, cast_xpos, cast_xmat,
+                cast_size, cast_rbound, cast_aabb, cast_rgba, tile_xipos, bvh_aabb, tile_bvh, scene_geom):
+    """The persons' geoms copied into their cast slots ``slot`` (the scene's arrays first, the cast model's
+    second), the unused slots' geoms transparent (MuJoCo's ray casting skips them), each used body's bounding box
+    (MuJoCo's ``bvh_aabb`` row: centre relative to the body's xipos, half sizes) round its geoms, an unused body's
+    far away and of no size (every ray misses it), and ``scene_geom`` mapping each cast geom to the scene's."""
+    cast_rgba[cast_geoms.ravel(), 3] = 0.0
+    lo, hi = np.full((len(tile_bvh), 3), np.inf), np.full((len(tile_bvh), 3), -np.inf)
+    for k in range(len(slot)):
+        b = slot[k] // TILE
+        for p in range(scene_geoms.shape[1]):
+            g, c = scene_geoms[k, p], cast_geoms[slot[k], p]
+            cast_xpos[c], cast_xmat[c], cast_size[c], cast_aabb[c], cast_rgba[c] = xpos[g], xmat[g], size[g], aabb[g], \
+                rgba[g]
+            cast_rbound[c] = rbound[g]
+            scene_geom[c] = g
+            for a in range(3):
+                lo[b, a] = min(lo[b, a], xpos[g, a] - rbound[g])
+                hi[b, a] = max(hi[b, a], xpos[g, a] + rbound[g])
+    for b in range(len(tile_bvh)):
+        row = tile_bvh[b]
+        for a in range(3):
+            if b < bodies and lo[b, a] <= hi[b, a]:
+                bvh_aabb[row, a] = (lo[b, a] + hi[b, a]) / 2 - tile_xipos[b, a]
+                bvh_aabb[row, 3 + a] = (hi[b, a] - lo[b, a]) / 2
+            else:
+                bvh_aabb[row, a], bvh_aabb[row, 3 + a] = 1e9, 0.0
 
 
 class Scene:
@@ -183,6 +248,10 @@ class Scene:
             self._geom["head"] = np.stack([geoms("person{}_head"), geoms("person{}_neck")], 1)
         if "legs" in self.parts:
             self._geom["legs"] = np.stack([geoms("person{}_left_leg"), geoms("person{}_right_leg")], 1)
+        # the names of a person's geoms, in the order of _all_person_geoms's columns
+        self._part_names = [name for part, names in (("torso", ("torso",)), ("head", ("head", "neck")),
+                                                     ("legs", ("left_leg", "right_leg"))) if part in self.parts
+                            for name in names]
         self._all_person_geoms = np.concatenate([g.reshape(capacity, -1 if capacity else 1)
                                                  for g in self._geom.values()], 1).astype(np.int64) \
             if self._geom else np.zeros((capacity, 0), np.int64)
@@ -275,49 +344,59 @@ class Scene:
     def cast(self, origin: np.ndarray, directions: np.ndarray, groups: np.ndarray, exclude_body: int, cutoff: float,
              geom: np.ndarray, dist: np.ndarray, normal: np.ndarray | None = None) -> None:
         """MuJoCo's ``mj_multiRay`` from ``origin`` along ``directions`` [n, 3] in the scene as last synced: into
-        ``geom`` (int32, -1: no hit), ``dist`` (-1: no hit) and ``normal`` [3 n] where given.
+        ``geom`` (int32, the scene's geom ids; -1: no hit), ``dist`` (-1: no hit) and ``normal`` [3 n] where given.
 
-        Why not the scene's own model: MuJoCo's ray loop first tests every ray against every body's bounding sphere,
-        and a person is one to three bodies: in the airport at 15 s (170 bodies) a scan cost 430-460 us, 240-280 us
-        here. The cast is made in a copy of the model whose persons' geoms are all in one body ("crowd"), with
-        the geoms' poses, sizes, bounds and colours copied from the scene: the same geoms in the same order, each
-        tested against the ray by MuJoCo with the same numbers. The crowd body's bounding box is set to hold every
-        person alive, so it culls only rays that miss them all. (The scene model's body spheres are those MuJoCo
-        compiled for the adult body: a person scaled by ``sync`` can poke out of them, and rays in 3D then missed
-        them there. tests/test_laser.py checks these hits against ``mj_ray``, which tests every geom.)"""
+        Why not the scene's own model: MuJoCo's ray loop tests every ray against every body's bounding sphere, then
+        against each geom of the bodies it meets, and a person is one to three bodies. The cast is made in a copy
+        of the model (``_make_cast_model``) whose persons are gathered by place into bodies of TILE (``_tiles``),
+        each body's box round its persons: a ray skips the bodies it misses, and every body's geoms with them. In
+        the airport at 15 s (170 bodies) a scan cost 430-460 us in the scene's model, 220-230 us with all persons
+        in one body, 185 us in tiles (and 18 us a sync for the copy, made once for all the lasers of a tick). The persons' geom poses, sizes, bounds and colours are copied in from the scene, so
+        MuJoCo tests each geom against the ray with the same numbers; walls and the robot keep their geom ids, and
+        a person's hit is told by the scene's id. (The scene model's body spheres are those MuJoCo compiled for
+        the adult body: a person scaled by ``sync`` can poke out of them, and rays in 3D then missed them there.
+        tests/test_laser.py checks these hits against ``mj_ray``, which tests every geom.)"""
         if self._cast_model is None:
             self._make_cast_model()
         cm, cd = self._cast_model, self._cast_data
         if not self._cast_synced:
-            m, d = self.model, self.data
-            np.copyto(cd.geom_xpos, d.geom_xpos)
-            np.copyto(cd.geom_xmat, d.geom_xmat)
-            np.copyto(cd.xipos[:self.robot_body + 1], d.xipos[:self.robot_body + 1])
-            for field in ("geom_size", "geom_rbound", "geom_aabb", "geom_rgba"):
-                np.copyto(getattr(cm, field), getattr(m, field))
-            alive = self._all_person_geoms[:self.alive].ravel()
-            if len(alive):
-                reach = m.geom_rbound[alive, None]
-                lo = (d.geom_xpos[alive] - reach).min(axis=0)
-                hi = (d.geom_xpos[alive] + reach).max(axis=0)
-                centre = (lo + hi) / 2 - cd.xipos[self._crowd_body]  # MuJoCo adds the body's xipos
-                cm.bvh_aabb[self._crowd_bvh] = np.concatenate([centre, (hi - lo) / 2])
-            self._cast_synced = True
+            self._sync_cast()
         mujoco.mj_multiRay(cm, cd, origin, directions.reshape(-1), groups, 1, exclude_body, geom, dist, normal,
                            len(dist), cutoff)
+        geom[:] = self._scene_geom[geom]
+
+    def _sync_cast(self) -> None:
+        """The cast model's copy of the scene as last synced: the walls' and robot's poses, the persons in tiles."""
+        m, d, cm, cd = self.model, self.data, self._cast_model, self._cast_data
+        first = self._first_person_geom
+        cd.geom_xpos[:first], cd.geom_xmat[:first] = d.geom_xpos[:first], d.geom_xmat[:first]
+        cd.xipos[self.robot_body] = d.xipos[self.robot_body]
+        n = self.alive
+        slot, bodies = _tiles(self.person_xy[:n], TILE)
+        _fill_tiles(slot, bodies, self._all_person_geoms[:n], self._cast_geoms, d.geom_xpos, d.geom_xmat, m.geom_size,
+                    m.geom_rbound, m.geom_aabb, m.geom_rgba, cd.geom_xpos, cd.geom_xmat, cm.geom_size, cm.geom_rbound,
+                    cm.geom_aabb, cm.geom_rgba, self._tile_xipos, cm.bvh_aabb, self._tile_bvh, self._scene_geom)
+        self._cast_synced = True
 
     def _make_cast_model(self) -> None:
-        """The model ``cast`` uses: this one with every person's geoms in the body "crowd", the same geom ids."""
+        """The model ``cast`` uses: this one with the persons' geoms in ``_tile_count`` bodies of TILE slots; the
+        walls' and the robot's geoms keep their ids."""
         m = self.model
         cm = self._cast_model = mujoco.MjModel.from_xml_string(
-            self._xml.replace("{persons}", _crowd_xml(self.capacity, self.parts)))
+            self._xml.replace("{persons}", _tiles_xml(self.capacity, self.parts)))
         self._cast_data = mujoco.MjData(cm)
         mujoco.mj_kinematics(cm, self._cast_data)
-        self._crowd_body = cm.body("crowd").id
-        self._crowd_bvh = cm.body_bvhadr[self._crowd_body]
-        if (cm.ngeom != m.ngeom or cm.body("robot").id != self.robot_body
-                or any(cm.geom(i).name != m.geom(i).name for i in range(m.ngeom))):
-            raise AssertionError("the cast model's geoms or robot differ from the scene's")
+        self._first_person_geom = first = int(self._all_person_geoms.min()) if self._all_person_geoms.size else m.ngeom
+        if cm.body("robot").id != self.robot_body or any(cm.geom(i).name != m.geom(i).name for i in range(first)):
+            raise AssertionError("the cast model's walls or robot differ from the scene's")
+        self._tile_bodies = np.array([cm.body(f"tile{b}").id for b in range(_tile_count(self.capacity))], np.int64)
+        self._tile_bvh = cm.body_bvhadr[self._tile_bodies].astype(np.int64)
+        self._tile_xipos = self._cast_data.xipos[self._tile_bodies]  # mocap bodies that never move
+        slots = len(self._tile_bodies) * TILE
+        self._cast_geoms = np.array([[cm.geom(f"person{c}_{part}").id for part in self._part_names]
+                                     for c in range(slots)], np.int64).reshape(slots, -1)
+        # the scene's geom id of each cast geom (the extra last entry maps -1, no hit, to -1)
+        self._scene_geom = np.append(np.arange(cm.ngeom, dtype=np.int32), np.int32(-1))
         self._cast_synced = False
 
     def slots_of(self, person_ids: np.ndarray) -> np.ndarray:

@@ -335,3 +335,45 @@ def test_reading_kernel_bands_clips_and_maps_persons_as_worked_by_hand():
     expected = [np.nan, 5.0 + (0.01 + 0.005), 10.0 + (-0.01 + 0.005), 15.0 + (0.04 + 0.01), 20.0, np.nan, np.nan]
     np.testing.assert_array_equal(ranges, expected)  # 10 m is the first band's (edges are upper bounds, inclusive)
     np.testing.assert_array_equal(person, [-1, 41, -1, 42, 41, -1, -1])
+
+
+def test_shown_counts_each_persons_beams_and_tests_range_and_field_of_view():
+    # a laser at (1, 2) heading +y (yaw pi/2), 5 m, a 90 degree field of view (45 each side). Persons 3, 7, 9, 12 at
+    # (1, 4) ahead at 2 m: in view; (3, 2) to its right (bearing -90 degrees): out; (1, 8) ahead at 6 m: out of range;
+    # (1.5, 3) ahead-right (bearing atan2(1, 0.5) - 90 = -26.6 degrees): in. Beams hit persons 7, 7, 12 and 3.
+    from sensors.laser import _shown
+
+    ids = np.array([3, 7, 9, 12])
+    position = np.array([[1.0, 4.0], [3.0, 2.0], [1.0, 8.0], [1.5, 3.0]])
+    beams, in_view = np.zeros(4), np.empty(4, bool)
+    _shown(ids, position, np.array([-1, 7, 7, 12, -1, 3]), 1.0, 2.0, np.pi / 2, 5.0, np.radians(45.0), beams, in_view)
+    assert beams.tolist() == [1.0, 2.0, 0.0, 1.0]
+    assert in_view.tolist() == [True, False, False, True]
+    # behind the laser is out of a 90 degree view, and in a 360 degree one
+    _shown(ids[:1], np.array([[1.0, 0.0]]), np.array([-1]), 1.0, 2.0, np.pi / 2, 5.0, np.radians(45.0), beams[:1],
+           in_view[:1])
+    assert not in_view[0]
+    _shown(ids[:1], np.array([[1.0, 0.0]]), np.array([-1]), 1.0, 2.0, np.pi / 2, 5.0, np.radians(180.0), beams[:1],
+           in_view[:1])
+    assert in_view[0]
+
+
+def test_the_cast_models_tiles_gather_neighbours():
+    # 20 persons on a line x = 0..19 (given in reverse), tiles of 8: ceil(20 / 8) = 3 tiles' worth, round(sqrt(3)) = 2
+    # bands of 10 by x; each band by y (all 0: x order kept) into bodies of 8: band x = 0..9 fills body 0 (slots 0-7)
+    # and body 1 (slots 8, 9); band x = 10..19 starts at body 2 (slots 16-23) and ends in body 3 (24, 25)
+    from sensors.scene import TILE, _tile_count, _tiles
+
+    assert TILE == 8
+    xy = np.column_stack([np.arange(19.0, -1.0, -1.0), np.zeros(20)])
+    slot, bodies = _tiles(xy, 8)
+    x_of_slot = dict(zip(slot.tolist(), xy[:, 0].tolist()))
+    assert bodies == 4 and sorted(x_of_slot) == [*range(10), *range(16, 26)]
+    assert [x_of_slot[s] for s in [*range(10), *range(16, 26)]] == list(range(20))
+    assert _tile_count(20) >= bodies
+    # a band sorted by y: two columns of 8 at x = 0 and 0.1, y descending in the input; one band (round(sqrt(2)) = 1)
+    xy = np.column_stack([np.repeat([0.0, 0.1], 8), np.tile(np.arange(7.0, -1.0, -1.0), 2)])
+    slot, bodies = _tiles(xy, 8)
+    assert bodies == 2 and sorted(slot.tolist()) == list(range(16))
+    assert xy[np.argsort(slot), 1].tolist() == [0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7]
+    assert _tiles(np.zeros((0, 2)), 8)[1] == 0

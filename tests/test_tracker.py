@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from evaluation import ClearMot
-from pipeline.tracking.association import WINDOWS_FROM, gated_mahalanobis, greedy_assign, mahalanobis
+from pipeline.tracking.association import gated_mahalanobis, greedy_assign, mahalanobis
 from pipeline.tracking.imm import kalman_update, kalman_update_soa
 from pipeline.tracking.initiation import CountInitiation
 from pipeline.tracking.motion import ConstantVelocity
@@ -95,9 +95,9 @@ def test_mahalanobis_hand_worked():
 
 
 def test_gated_mahalanobis_is_the_full_matrix_within_the_gate():
-    # 80 tracks x 70 detections (over WINDOWS_FROM: the windowed path), correlated and unequal covariances, some
-    # tracks far more uncertain than others, detections sharing an x: every pair within the gate has the full
-    # matrix's value, bit for bit, and no pair within it is missed
+    # 80 tracks x 70 detections, correlated and unequal covariances, some tracks far more uncertain than others,
+    # detections sharing an x: every pair within the gate has the full matrix's value, bit for bit, no pair within it
+    # is missed, and the windows skip most pairs (inf)
     rng = np.random.default_rng(3)
     n, m, gate = 80, 70, 13.82
     x = rng.uniform(0, 30, (n, 4))
@@ -107,14 +107,26 @@ def test_gated_mahalanobis_is_the_full_matrix_within_the_gate():
     z[60:65, 0] = z[10, 0]
     B = rng.normal(0, 0.2, (m, 2, 2))
     R = B @ B.transpose(0, 2, 1) + 0.005 * np.eye(2)
-    assert n * m >= WINDOWS_FROM
     full, gated = mahalanobis(x, P, z, R), gated_mahalanobis(x, P, z, R, gate)
     inside = full <= gate
     assert inside.sum() > 100 and np.isfinite(gated).sum() < n * m / 2  # a test of windows that skip pairs
     np.testing.assert_array_equal(gated <= gate, inside)
     np.testing.assert_array_equal(gated[inside], full[inside])
-    # small problems take the whole matrix
-    np.testing.assert_array_equal(gated_mahalanobis(x[:5], P[:5], z[:5], R[:5], gate), full[:5, :5])
+    # strided views (the tracker passes its state transposed) give the same numbers
+    np.testing.assert_array_equal(mahalanobis(np.asfortranarray(x), P.transpose(0, 2, 1), z, R), full)
+
+
+def test_gated_mahalanobis_windows_hand_worked():
+    # a track at x = 0 with P_xx = 1, detections with R = I: S_xx = 2, and the window is |dx| <= sqrt(2 * 1.5 * 3)
+    # = 3 for a gate of 3. Detections at x = 1 (d2 = 1/2), 2.9 (4.205: inside the window, beyond the gate), 3.1
+    # (outside the window: inf), -2 (2)
+    x, P = np.zeros((1, 2)), np.eye(2)[None]
+    z = np.array([[1.0, 0.0], [2.9, 0.0], [3.1, 0.0], [-2.0, 0.0]])
+    R = np.repeat(np.eye(2)[None], 4, axis=0)
+    np.testing.assert_allclose(gated_mahalanobis(x, P, z, R, 3.0), [[0.5, 4.205, np.inf, 2.0]])
+    np.testing.assert_allclose(mahalanobis(x, P, z, R), [[0.5, 4.205, 4.805, 2.0]])
+    assert gated_mahalanobis(x, P, z[:0], R[:0], 3.0).shape == (1, 0)
+    assert gated_mahalanobis(x[:0], P[:0], z, R, 3.0).shape == (0, 4)
 
 
 def test_greedy_assign_takes_global_minimum_first():
