@@ -10,12 +10,14 @@ Detections are in the tracking frame (odom); the robot's localisation in the map
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from scenarios.geometry import inside_polygon, wall_segments
 
+from .compiled import kernel
 from .frames import transform_points
 from .params import param
 from .types import DetectedPersons
@@ -94,11 +96,9 @@ class MapFilter:
 
     def keep(self, xy_world: np.ndarray) -> np.ndarray:
         """Which of the points [n, 2] (world) may be persons: off the blocked cells."""
-        cell = np.floor((xy_world - self.origin) / self.resolution).astype(int)
-        rows, cols = self.blocked.shape
-        on_grid = (cell[:, 0] >= 0) & (cell[:, 0] < cols) & (cell[:, 1] >= 0) & (cell[:, 1] < rows)
-        out = np.ones(len(xy_world), bool)
-        out[on_grid] = ~self.blocked[cell[on_grid, 1], cell[on_grid, 0]]
+        xy = np.ascontiguousarray(xy_world, np.float64).reshape(-1, 2)
+        out = np.empty(len(xy), np.bool_)
+        _off_blocked(xy, float(self.origin[0]), float(self.origin[1]), float(self.resolution), self.blocked, out)
         return out
 
     def filter(self, detections: DetectedPersons, world_T_odom: np.ndarray) -> DetectedPersons:
@@ -111,3 +111,13 @@ class MapFilter:
         originals = None if d.originals is None else {k: v[keep] for k, v in d.originals.items()}
         return DetectedPersons(d.stamp, d.frame, d.modality, d.detection_id[keep], d.position[keep],
                                d.covariance[keep], d.confidence[keep], originals)
+
+
+@kernel
+def _off_blocked(xy, ox, oy, resolution, blocked, out):
+    """``MapFilter.keep``: each point's cell (floor of its offset from the grid's origin over the resolution), kept
+    unless it is a blocked cell of the grid; points off the grid are kept."""
+    rows, cols = blocked.shape
+    for i in range(len(xy)):
+        col, row = math.floor((xy[i, 0] - ox) / resolution), math.floor((xy[i, 1] - oy) / resolution)
+        out[i] = not (0 <= col < cols and 0 <= row < rows and blocked[int(row), int(col)])

@@ -6,9 +6,12 @@ a large finite variance (``UNKNOWN_VARIANCE``), never inf, as the SPENCER messag
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from .compiled import kernel
 
 UNKNOWN_VARIANCE = 1e6
 """Variance (m^2) given to a covariance component the producer does not know (seed 000: large, never infinite)."""
@@ -47,11 +50,20 @@ class LaserScan:
         points = self.__dict__.get("_points")
         if points is None:
             cos, sin = _beam_directions(self.angle_min, self.angle_increment, self.ranges.size)
-            r = np.where(self.returned, self.ranges, np.nan)
-            points = np.stack([r * cos, r * sin], axis=1)
+            points = np.empty((self.ranges.size, 2))
+            _endpoints(np.asarray(self.ranges, np.float64), float(self.range_max), cos, sin, points)
             points.flags.writeable = False
             self._points = points
         return points
+
+
+@kernel
+def _endpoints(ranges, range_max, cos, sin, out):
+    """``LaserScan.points``: each beam's range times its direction's cos and sin, NaN where it returned nothing
+    (non-finite, or not below ``range_max``)."""
+    for i in range(len(ranges)):
+        r = ranges[i] if math.isfinite(ranges[i]) and ranges[i] < range_max else np.nan
+        out[i, 0], out[i, 1] = r * cos[i], r * sin[i]
 
 
 _DIRECTIONS: dict[tuple[float, float, int], tuple[np.ndarray, np.ndarray]] = {}

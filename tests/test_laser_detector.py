@@ -234,3 +234,13 @@ def test_person_centres_by_hand():
     p = np.array([[2.0, -0.2], [1.9, 0.0], [2.0, 0.2], [5.0, -0.3], [5.0, 0.0], [5.0, 0.3], [8.0, 0.0], [8.0, 0.2]])
     centre = _person_centres(p, np.array([0, 3, 6]), np.array([3, 3, 2]), 3, 0.1, 0.9, 0.03)
     assert centre == pytest.approx(np.array([[5.9 / 3 + np.pi / 8 * 0.4, 0.0]]))
+
+
+def test_scan_points_hand_worked():
+    # beams at 0, 90, 180 and 270 degrees, range_max 5: 1 m ahead -> (1, 0); NaN and 5 m (= range_max) return
+    # nothing -> NaN rows; 2 m at 270 degrees -> (2 cos 270, 2 sin 270) = (~0, -2). Made once and kept read-only.
+    scan = LaserScan(0.0, "laser", 0.0, np.pi / 2, 5.0, np.array([1.0, np.nan, 5.0, 2.0]),
+                     np.full(4, -1))
+    p = scan.points()
+    np.testing.assert_allclose(p[[0, 3]], [[1.0, 0.0], [0.0, -2.0]], atol=1e-12)
+    assert np.isnan(p[[1, 2]]).all() and p is scan.points() and not p.flags.writeable

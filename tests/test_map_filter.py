@@ -58,6 +58,7 @@ def test_obstacles_are_solid():
     f = MapFilter([], [pillar], resolution=0.1, inflation=0.0)
     assert not f.keep(np.array([[1.4, 1.4], [1.05, 1.75]])).any()  # its middle and inside a corner
     assert f.keep(np.array([[2.0, 1.4], [0.8, 0.8]])).all()
+    assert f.keep(np.array([[-100.0, 1.4], [1.4, 100.0], [1e6, -1e6]])).all()  # off the grid: nothing known there
 
 
 def test_detections_near_a_wall_are_dropped_and_those_in_the_room_kept():
