@@ -61,20 +61,19 @@ class GroundTruth:
         beams of ``scans`` (this cycle's) and occlusion. With a depth camera starting the cycles, the visible are
         those it shows at least half of (KTP's labelling rule, seed 003 Sec. 2)."""
         agents, robot = world.agents(), world.robot
-        near = np.linalg.norm(agents.position - robot.pose[:2], axis=1) <= self.max_range + GT_MARGIN
+        distance = np.linalg.norm(agents.position - robot.pose[:2], axis=1)
+        near = np.flatnonzero(distance <= self.max_range + GT_MARGIN)
+        distance, xy, n = distance[near], agents.position[near], len(near)
         odom_T_world = inverse(robot.world_T_odom)
-        pos = transform_points(odom_T_world, agents.position[near])
-        vel = rotate(odom_T_world, agents.velocity[near])
-        n = int(near.sum())
         zeros = np.zeros((n, 2, 2))
         truth = TrackedPersons(agents.stamp, TRACKING_FRAME, agents.id[near], np.ones(n, bool), np.zeros(n, bool),
-                               np.full(n, -1, np.int64), pos, vel, zeros, zeros.copy(), np.zeros(n),
+                               np.full(n, -1, np.int64), transform_points(odom_T_world, xy),
+                               rotate(odom_T_world, agents.velocity[near]), zeros, zeros.copy(), np.zeros(n),
                                agents.group_id[near])
-        xy = agents.position[near]
-        distance = np.linalg.norm(xy - robot.pose[:2], axis=1)
-        lasers = [k for k, name in enumerate(visibility.sensors) if name in {scan.frame for scan in scans}]
-        beams = visibility.amount[near][:, lasers].sum(axis=1).astype(np.int64) if lasers else np.zeros(len(xy), int)
-        seed000 = np.zeros(len(xy), bool)
+        frames = {scan.frame for scan in scans}
+        lasers = [k for k, name in enumerate(visibility.sensors) if name in frames]
+        beams = visibility.amount[near][:, lasers].sum(axis=1).astype(np.int64) if lasers else np.zeros(n, int)
+        seed000 = np.zeros(n, bool)
         for scan in scans:
             pose = self.lasers[scan.frame].pose_in(robot.pose)
             points = scan.points()
