@@ -304,13 +304,15 @@ def test_the_step_kernels_by_hand(make_scenario):
     vel = np.array([[0.0, 0.0], [2.0, 0.0], [-1.0, 0.0]])
     east = np.array([[1.0, 0.0]] * 3)
     no_groups = (np.zeros(0, np.int64), np.zeros(0, np.int64), 0)
-    args = (np.full(3, 0.25), *no_groups, np.ones(3, bool), forces.NO_FORCE, forces.NO_PAIRS, True, True, np.nan,
+    order = np.arange(3)  # the order of the pair forces' sums
+    args = (np.full(3, 0.25), *no_groups, np.ones(3, bool), forces.NO_FORCE, forces.NO_PAIRS, order, True, np.nan,
             np.nan, 0.0, 0.1, *crowd._parameters, *WallGrid.of(np.zeros((0, 2, 2))).arrays())
     walking = _velocity(pos, vel, np.array([1.2, 1.0, 1.0]), east, np.array([1.2, 1.0, 0.0]), np.zeros(3, bool),
                         *args)
     assert walking == pytest.approx(np.array([[0.24, 0.0], [1.3, 0.0], [0.0, 0.0]]))
     holding = _velocity(pos[2:], vel[2:], np.ones(1), east[:1], np.zeros(1), np.ones(1, bool),
-                        *(a[2:] if isinstance(a, np.ndarray) and a.shape == (3,) else a for a in args))
+                        *(order[:1] if a is order else a[2:] if isinstance(a, np.ndarray) and a.shape == (3,) else a
+                          for a in args))
     assert holding == pytest.approx(np.array([[-0.8, 0.0]]))
 
     # a move of (0.3, 0.4) in 0.1 s is 5 m/s and 0.5 m walked; one that crossed a wall is undone: 0 m/s

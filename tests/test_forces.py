@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from crowdsim.crowd import forces
-from crowdsim.crowd.contacts import push_out_of_walls
+from crowdsim.crowd.contacts import _from_space, _to_space, push_out_of_walls
 from crowdsim.envs.world import _contacts
 from scenarios.wall_grid import WallGrid, near_walls
 
@@ -52,17 +52,16 @@ def test_moussaid_pair_beyond_its_reach_gives_nothing():
 def test_moussaid2009_sums_each_pair_on_both_persons_with_their_view_weights():
     # two still persons 1 m apart on x, both heading +x: i (behind) sees j ahead and is pushed back with the full
     # 0.25844 m/s^2; j is pushed forward by i behind it, out of view: 0.46 of it. A third person 6 m away is beyond
-    # the 5 m interaction range. The same sums from the pairs as from every pair.
+    # the 5 m interaction range.
     pos = np.array([[0.0, 0.0], [1.0, 0.0], [7.0, 0.0]])
     vel = np.zeros((3, 2))
     heading = np.tile([1.0, 0.0], (3, 1))
     walking = np.ones(3, bool)
     args = (5.0, A, LAM, GAMMA, N, N_PRIME, walking, heading, 200.0, 0.46)
-    every = forces.moussaid2009(pos, vel, np.zeros((0, 2), np.int64), True, *args)
-    listed = forces.moussaid2009(pos, vel, np.array([[0, 1]]), False, *args)
+    f = forces.moussaid2009(pos, vel, np.arange(3), *args)
     push = 4.5 * math.exp(-1 / 0.35)
-    assert every == pytest.approx(np.array([[-push, 0], [0.46 * push, 0], [0, 0]]))
-    assert np.array_equal(every, listed)
+    assert f == pytest.approx(np.array([[-push, 0], [0.46 * push, 0], [0, 0]]))
+    assert np.array_equal(f, forces.moussaid2009(pos, vel, np.array([2, 1, 0]), *args))  # one pair: any order
 
 
 def test_standing_persons_feel_no_turning_term():
@@ -71,7 +70,7 @@ def test_standing_persons_feel_no_turning_term():
     heading = np.array([[1.0, 0.0], [1.0, 0.0]])
     f = {}
     for walking in (True, False):
-        f[walking] = forces.moussaid2009(pos, vel, np.array([[0, 1]]), False, 5.0, A, LAM, GAMMA, N, N_PRIME,
+        f[walking] = forces.moussaid2009(pos, vel, np.arange(2), 5.0, A, LAM, GAMMA, N, N_PRIME,
                                          np.array([walking, walking]), heading, 360.0, 1.0)
     brake, turn = 0.59677 * 0.25661 / math.sqrt(2), 0.59677 * 0.54631 / math.sqrt(2)
     assert f[False][0] == pytest.approx([-brake, -brake], rel=1e-3)
@@ -136,6 +135,16 @@ def test_push_out_moves_a_body_clear_of_each_wall_of_a_corner():
     assert pos == pytest.approx(np.array([[3.0, 0.25], [0.25, 0.25]]))
 
 
+def test_persons_go_into_their_rows_of_the_contact_space_and_come_back_in_their_order():
+    # space rows: person 1, the robot (-1), person 0; the robot's row keeps what Chipmunk had
+    perm = np.array([1, -1, 0])
+    state = np.full((3, 4), 9.0)
+    _to_space(state, np.array([[1.0, 2.0], [3.0, 4.0]]), np.array([[0.1, 0.2], [0.3, 0.4]]), perm)
+    assert state.tolist() == [[3.0, 4.0, 0.3, 0.4], [9.0] * 4, [1.0, 2.0, 0.1, 0.2]]
+    moved = np.array([[5.0, 6.0], [7.0, 8.0], [1.5, 2.5]])
+    assert _from_space(moved, perm, 2).tolist() == [[1.5, 2.5], [5.0, 6.0]]
+
+
 def test_crossing_a_wall_is_found_and_a_parallel_move_is_not():
     grid = WallGrid.of(np.array([[[-5.0, 0.0], [5.0, 0.0]]]))
     starts = np.array([[0.0, -0.1], [0.0, 0.1], [5.0, -1.0], [5.1, -1.0]])
@@ -174,13 +183,78 @@ def test_environment_contacts_part_overlapping_persons_half_each_inside_the_room
     assert z == pytest.approx(np.array([[0.9, 1.0], [1.4, 1.0], [0.25, 3.0]]))
 
 
-def test_every_pair_and_the_k_d_trees_pairs_give_the_same_forces():
-    # a crowd of 150 over 20 x 20 m: the 5 m pairs from the tree are the pairs the direct test keeps
+def test_the_grid_of_a_large_crowd_finds_the_pairs_in_range():
+    # 300 persons 10 m apart on a line (out of each other's reach), but for two 1 m apart at the far end: the pair of
+    # test_moussaid2009_sums_each_pair_on_both_persons_with_their_view_weights, found on the grid of cells (above
+    # EVERY_PAIR persons) in any order of the persons, and nothing for the others
+    pos = np.column_stack([np.arange(300) * 10.0, np.zeros(300)])
+    pos[299] = [2981.0, 0.0]
+    vel, heading = np.zeros((300, 2)), np.tile([1.0, 0.0], (300, 1))
+    args = (5.0, A, LAM, GAMMA, N, N_PRIME, np.ones(300, bool), heading, 200.0, 0.46)
+    push = 4.5 * math.exp(-1 / 0.35)
+    expected = np.zeros((300, 2))
+    expected[298, 0], expected[299, 0] = -push, 0.46 * push
+    for order in (np.arange(300), np.random.default_rng(0).permutation(300)):
+        assert forces.moussaid2009(pos, vel, order, *args) == pytest.approx(expected, abs=1e-15)
+
+
+def test_a_crowds_pair_forces_are_summed_in_the_order_of_the_k_d_trees_pairs():
+    # pair_order is what makes the forces those summed pair by pair over the tree's list of pairs, in its order,
+    # to the last bit: the sums over that list worked here one by one, for crowds on the grid (300) and not (150)
     rng = np.random.default_rng(3)
-    pos, vel = rng.uniform(0, 20, (150, 2)), rng.normal(0, 1, (150, 2))
-    heading = vel / np.linalg.norm(vel, axis=1, keepdims=True)
-    args = (5.0, A, LAM, GAMMA, N, N_PRIME, rng.random(150) < 0.8, heading, 200.0, 0.46)
-    every = forces.moussaid2009(pos, vel, np.zeros((0, 2), np.int64), True, *args)
-    tree = forces.moussaid2009(pos, vel, forces.neighbour_pairs(pos, 5.0), False, *args)
-    assert np.abs(every).max() > 1.0
-    assert every == pytest.approx(tree, abs=1e-12)
+    for n in (150, 300):
+        pos, vel = rng.uniform(0, 20 * n / 150, (n, 2)), rng.normal(0, 1, (n, 2))
+        heading = vel / np.linalg.norm(vel, axis=1, keepdims=True)
+        walking = rng.random(n) < 0.8
+        reach, cos_half = forces.moussaid_reach(A, GAMMA), math.cos(math.radians(200.0) / 2)
+        near = [(i, j) for i in range(n) for j in range(i + 1, n) if np.sum((pos[j] - pos[i]) ** 2) <= 25.0]
+        pairs = forces.neighbour_pairs(pos, 5.0) if n > forces.EVERY_PAIR else near  # up to 200, every pair in turn
+        listed = np.zeros((n, 2))
+        for i, j in pairs:
+            bx, by, sx, sy = forces.moussaid_pair(pos[j, 0] - pos[i, 0], pos[j, 1] - pos[i, 1], vel[j, 0] - vel[i, 0],
+                                                  vel[j, 1] - vel[i, 1], A, LAM, GAMMA, N, N_PRIME, reach)
+            if (bx, by, sx, sy) == (0.0, 0.0, 0.0, 0.0):
+                continue
+            for who, sign in ((i, 1.0), (j, -1.0)):
+                fx, fy = sign * (bx + walking[who] * sx), sign * (by + walking[who] * sy)
+                w = forces.seen_weight(heading[who, 0], heading[who, 1], fx, fy, cos_half, 0.46)
+                listed[who] += w * fx, w * fy
+        f = forces.moussaid2009(pos, vel, forces.pair_order(pos), 5.0, A, LAM, GAMMA, N, N_PRIME, walking, heading,
+                                200.0, 0.46)
+        assert np.abs(f).max() > 1.0
+        assert np.array_equal(f, listed)
+
+
+def test_leaf_order_is_the_k_d_trees():
+    # 20 persons on a line x = 0..19 (a leaf holds 16): the box [0, 19] splits at 9.5 into two leaves of 10, with
+    # std::partition swapping from both ends inwards: in place already, the order is the persons' own; reversed
+    # (person k at x = 19 - k), the ten below 9.5 (persons 10..19) are swapped pairwise with 0..9 from the ends
+    # inwards: 19, 18, .., 10, then 9, .., 0
+    line = np.column_stack([np.arange(20.0), np.zeros(20)])
+    assert forces.leaf_order(line).tolist() == list(range(20))
+    reversed_line = line[::-1].copy()
+    assert forces.leaf_order(reversed_line).tolist() == list(range(19, -1, -1))
+    # along y, x all alike; 17 alike points are a leaf as they are; a point cloud as scipy's own tree orders it
+    assert forces.leaf_order(line[:, ::-1].copy()).tolist() == list(range(20))
+    assert forces.leaf_order(np.ones((17, 2))).tolist() == list(range(17))
+    cloud = np.random.default_rng(1).uniform(0, 30, (500, 2))
+    assert np.array_equal(forces.leaf_order(cloud), forces._tree(cloud).indices)
+
+
+def test_rank_grid_lists_each_cells_persons_by_rank():
+    # reach 1 m: cells of 1 m from the lowest corner (0.2, 0), 3 x 2 of them; ranks are places in ``order``
+    pos = np.array([[0.5, 0.5], [2.5, 1.5], [0.2, 0.1], [1.0, 0.0]])
+    order = np.array([3, 2, 0, 1])  # person 3 is rank 0, person 2 rank 1, ...
+    start, ranks, cell, columns, rows, x0, y0 = forces._rank_grid(pos, order, 1.0)
+    assert (cell, columns, rows, x0, y0) == (1.0, 3, 2, 0.2, 0.0)
+    # persons 0 and 2 in cell 0 (ranks 2 and 1), 3 in cell 0 too (x 1.0 - 0.2 = 0.8), 1 in cell 1 x 3 + 2 = 5
+    assert start.tolist() == [0, 3, 3, 3, 3, 3, 4]
+    assert ranks.tolist() == [0, 1, 2, 3]
+
+
+def test_rank_grid_takes_larger_cells_for_a_crowd_spread_far_apart():
+    # two persons 2 km apart: cells of 1 m would be 2001 x 1, above 4 x 2 + 1024 cells; 2 m cells are 1001
+    start, ranks, cell, columns, rows, x0, y0 = forces._rank_grid(np.array([[0.0, 0.0], [2000.0, 0.0]]),
+                                                                  np.arange(2), 1.0)
+    assert (cell, columns, rows) == (2.0, 1001, 1)
+    assert ranks.tolist() == [0, 1] and start[1] == 1 and start[1000] == 1 and start[1001] == 2

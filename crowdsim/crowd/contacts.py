@@ -53,7 +53,6 @@ class ContactSolver:
             self.space.add(self.robot, disc)
         self.bodies: list[pymunk.Body] = []  # in the crowd's agent order
         self._perm = np.zeros(0, np.int64)  # space order -> agent index (-1: the robot or the static body)
-        self._mine, self._rows = np.zeros(0, bool), np.zeros(0, np.int64)
         self._out = batch.Buffer()
         self._in = batch.Buffer()
 
@@ -88,8 +87,6 @@ class ContactSolver:
         where = np.searchsorted(ours[order], space_ids).clip(0, max(len(ours) - 1, 0))
         found = (ours[order][where] == space_ids) if len(ours) else np.zeros(len(space_ids), bool)
         self._perm = np.where(found, order[where] if len(ours) else -1, -1)
-        self._mine = self._perm >= 0  # the space's rows that are persons
-        self._rows = self._perm[self._mine]  # the persons of those rows, in space order
 
     def step(self, pos: np.ndarray, vel: np.ndarray, dt: float, robot_pose: np.ndarray | None = None,
              robot_velocity: np.ndarray | None = None) -> np.ndarray:
@@ -101,19 +98,35 @@ class ContactSolver:
         self._out.clear()
         batch.get_space_bodies(self.space, FIELDS, self._out)
         state = np.frombuffer(self._out.float_buf(), dtype=np.float64).reshape(-1, 4).copy()
-        mine, rows = self._mine, self._rows
-        state[mine, :2] = pos[rows]
-        state[mine, 2:] = vel[rows]
+        _to_space(state, pos, vel, self._perm)
         self._in.set_float_buf(state.ravel())
         batch.set_space_bodies(self.space, FIELDS, self._in)
         for _ in range(SUBSTEPS):
             self.space.step(dt / SUBSTEPS)
         self._out.clear()
         batch.get_space_bodies(self.space, batch.BodyFields.POSITION, self._out)
-        moved = np.frombuffer(self._out.float_buf(), dtype=np.float64).reshape(-1, 2)
-        out = np.empty_like(pos)
-        out[rows] = moved[mine]
-        return out
+        return _from_space(np.frombuffer(self._out.float_buf(), dtype=np.float64).reshape(-1, 2), self._perm,
+                           len(pos))
+
+
+@kernel
+def _to_space(state, pos, vel, perm):
+    """The persons' positions and velocities into the rows [x, y, vx, vy] of ``state`` (space order) that are
+    theirs (``perm``: space row -> person, -1 for the robot's and other bodies', left as they are)."""
+    for row in range(len(perm)):
+        if perm[row] >= 0:
+            state[row, 0], state[row, 1] = pos[perm[row], 0], pos[perm[row], 1]
+            state[row, 2], state[row, 3] = vel[perm[row], 0], vel[perm[row], 1]
+
+
+@kernel
+def _from_space(moved, perm, persons):
+    """The positions [persons, 2] of the persons from the rows of ``moved`` (space order) that are theirs."""
+    out = np.empty((persons, 2))
+    for row in range(len(perm)):
+        if perm[row] >= 0:
+            out[perm[row], 0], out[perm[row], 1] = moved[row, 0], moved[row, 1]
+    return out
 
 
 def push_out_of_walls(pos: np.ndarray, radius: np.ndarray, grid: WallGrid) -> None:

@@ -151,13 +151,13 @@ class Crowd:
             e, speed = _desired(self.goal, self.pos, self.v0, holding, self.waiting, ARRIVAL_RADIUS)
             self.escapes.steer(self, e)
             moussaid = p.interaction == "moussaid2009"
-            every = moussaid and len(self.pos) <= forces.EVERY_PAIR
-            pairs = forces.NO_PAIRS if every else forces.neighbour_pairs(self.pos, p.interaction_range)
+            order = forces.pair_order(self.pos) if moussaid else forces.NO_ORDER
+            pairs = forces.NO_PAIRS if moussaid else forces.neighbour_pairs(self.pos, p.interaction_range)
             noise = self.rng.normal(0.0, p.random_force, self.pos.shape) if p.random_force > 0 else forces.NO_FORCE
             robot = (np.nan, np.nan) if robot_pos is None else (float(robot_pos[0]), float(robot_pos[1]))
             grouped, label, groups = forces.group_labels(np.where(holding, -1, self.group))  # walking members
             vel = _velocity(self.pos, self.vel, self.v0, e, speed, holding, self.radius, grouped, label, groups,
-                            self.escapes.repelled_by_walls(self), noise, pairs, every, moussaid, *robot, robot_radius,
+                            self.escapes.repelled_by_walls(self), noise, pairs, order, moussaid, *robot, robot_radius,
                             dt, *self._parameters, *self.wall_grid.arrays())
             before = self.pos.copy()
             robot_vel = None
@@ -195,14 +195,15 @@ def _desired(goal, pos, v0, holding, waiting, arrival_radius):
 
 
 @kernel
-def _velocity(pos, vel, v0, e, speed, holding, radius, grouped, label, groups, repelled, noise, pairs, every,
+def _velocity(pos, vel, v0, e, speed, holding, radius, grouped, label, groups, repelled, noise, pairs, order,
               moussaid, robot_x, robot_y, robot_radius, dt, tau, max_speed_factor, interaction_range, strength, lam,
               gamma, n, n_prime, agent_strength, agent_range, step_time, fov_deg, out_of_view, wall_strength,
               wall_range, wall_reach, gaze, coherence, repulsion, robot_strength, robot_range, walls, origin, cell,
               columns, rows, start, members):
     """Everyone's velocity after ``dt`` of every force term, walking in directions ``e`` at desired ``speed``: the
     relaxation towards the desired velocity (Helbing & Molnar 1995), the agent-agent force the crowd parameters
-    choose (Moussaid 2009 over every pair or the k-d tree's ``pairs``; else Helbing & Molnar's ellipses), the walls'
+    choose (Moussaid 2009 summed in the ``order`` of ``forces.pair_order``; else Helbing & Molnar's ellipses over
+    the k-d tree's ``pairs``), the walls'
     (but for those not ``repelled``), the groups' (Moussaid 2010, on the walking members ``grouped`` of ``groups``
     groups numbered ``label``), the robot's disc (unless ``robot_x`` is NaN) and the random force ``noise``.
     Pressure from ahead stops a walker but does not make them walk backwards (in a jam the field of view makes the
@@ -214,8 +215,8 @@ def _velocity(pos, vel, v0, e, speed, holding, radius, grouped, label, groups, r
         acc[i, 0] = (speed[i] * e[i, 0] - vel[i, 0]) / tau
         acc[i, 1] = (speed[i] * e[i, 1] - vel[i, 1]) / tau
     if moussaid:
-        acc += forces.moussaid2009(pos, vel, pairs, every, interaction_range, strength, lam, gamma, n, n_prime,
-                                   walking, e, fov_deg, out_of_view)
+        acc += forces.moussaid2009(pos, vel, order, interaction_range, strength, lam, gamma, n, n_prime, walking, e,
+                                   fov_deg, out_of_view)
     else:
         acc += forces.helbing_molnar1995(pos, vel, e, pairs, agent_strength, agent_range, step_time, fov_deg,
                                          out_of_view)

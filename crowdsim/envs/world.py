@@ -156,6 +156,7 @@ def _people_ticks(pos, vel, v0, goal, radius, walked, route, route_length, place
     gaps = np.empty((ticks, worlds))
     hit_pos, hit_vel = np.zeros((worlds, people, 2)), np.zeros((worlds, people, 2))
     walking = np.ones(people, np.bool_)
+    order = np.arange(people)  # each person's pair forces summed in the persons' order
     for k in range(worlds):
         z, v, r = pos[k], vel[k], radius[k]
         for t in range(ticks):
@@ -166,8 +167,8 @@ def _people_ticks(pos, vel, v0, goal, radius, walked, route, route_length, place
                 gx, gy = goal[k, i, 0] - z[i, 0], goal[k, i, 1] - z[i, 1]
                 norm = max(math.sqrt(gx * gx + gy * gy), 1e-9)
                 e[i, 0], e[i, 1] = gx / norm, gy / norm
-            acc = forces.moussaid2009(z, v, np.zeros((0, 2), np.int64), True, interaction_range, strength, lam, gamma,
-                                      n, n_prime, walking, e, fov_deg, out_of_view)
+            acc = forces.moussaid2009(z, v, order, interaction_range, strength, lam, gamma, n, n_prime, walking, e,
+                                      fov_deg, out_of_view)
             acc += forces.grid_wall_force(z, r, e, wall_strength, wall_range, wall_reach, fov_deg, out_of_view, walls,
                                           origin, cell, columns, rows, start, members)
             if robot_visible:
