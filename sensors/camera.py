@@ -121,6 +121,7 @@ class GLRenderer:
         self.context.make_current()
         # near and far clipping planes in metres (MuJoCo scales them by the model's extent)
         m.vis.map.znear, m.vis.map.zfar = NEAR_CLIP / m.stat.extent, FAR_CLIP / m.stat.extent
+        self._clip = m.vis.map.znear * m.stat.extent, m.vis.map.zfar * m.stat.extent  # as MuJoCo holds them (float32)
         if self.mjr is not None:
             self.mjr.free()
         self.mjr = mujoco.MjrContext(m, mujoco.mjtFontScale.mjFONTSCALE_100)
@@ -237,10 +238,8 @@ class GLRenderer:
     def _z(self, b: np.ndarray) -> np.ndarray:
         """z-depth in metres of OpenGL depth buffer values b in [0, 1], which are 1/z mapped from [1/near, 1/far]:
         z = near far / (far - b (far - near)); inf where nothing was drawn (b = 1)."""
-        m = self.scene.model
-        near, far = m.vis.map.znear * m.stat.extent, m.vis.map.zfar * m.stat.extent
-        b = b.astype(np.float64)
-        return np.where(b < 1.0, near * far / (far - b * (far - near)), np.inf).astype(np.float32)
+        near, far = self._clip
+        return _gl_depth(np.atleast_2d(b), near * far, far, far - near).reshape(b.shape)
 
     def _over_static(self, camera: str, rgb: bool) -> dict:
         """A fixed camera's depth and colour: the world without the robot as drawn once, and the robot drawn over
@@ -274,6 +273,17 @@ class GLRenderer:
             if rgb:
                 out["rgb"][v0:v1, u0:u1][nearer] = image[nearer]
         return out
+
+
+@kernel
+def _gl_depth(b, near_far, far, far_minus_near):
+    """``GLRenderer._z`` on the rows of b [r, c] (float32), in float64 as written there, rounded to float32."""
+    out = np.empty(b.shape, np.float32)
+    for i in range(b.shape[0]):
+        for j in range(b.shape[1]):
+            x = np.float64(b[i, j])
+            out[i, j] = np.float32(near_far / (far - x * far_minus_near)) if x < 1.0 else np.inf
+    return out
 
 
 def geom_box_corners(m: mujoco.MjModel, d: mujoco.MjData, geoms: np.ndarray) -> np.ndarray:
@@ -374,17 +384,34 @@ class RaycastRenderer:
 
 
 @kernel
+def _light(normal, view, p):
+    """The light at a surface of unit normal ``normal[p]`` seen along ``view[p]`` (any length) from a light at the
+    eye: 0.35 of the colour edge-on, all of it facing the eye."""
+    nx, ny, nz, vx, vy, vz = normal[p, 0], normal[p, 1], normal[p, 2], view[p, 0], view[p, 1], view[p, 2]
+    facing = abs(nx * vx + ny * vy + nz * vz) / max(np.sqrt(vx * vx + vy * vy + vz * vz), 1e-12)
+    return 0.35 + 0.65 * facing
+
+
+@kernel
 def shade(colour: np.ndarray, normal: np.ndarray, view: np.ndarray) -> np.ndarray:
     """Flat colours [n, 3] in [0, 1] lit by a light at the eye (bright where the surface faces the ray ``view``),
     as 8-bit RGB."""
     out = np.empty((len(colour), 3), np.uint8)
     for p in range(len(colour)):
-        (nx, ny, nz), (vx, vy, vz) = normal[p], view[p]
-        facing = abs(nx * vx + ny * vy + nz * vz) / max(np.sqrt(vx * vx + vy * vy + vz * vz), 1e-12)
-        light = 0.35 + 0.65 * facing
+        light = _light(normal, view, p)
         for c in range(3):
             out[p, c] = np.uint8(255 * min(max(colour[p, c] * light, 0.0), 1.0))
     return out
+
+
+@kernel
+def _shade_people(rgb, pixel, owner, part, palette, normal, view):
+    """``shade`` of each person's pixel (at ``pixel`` of the flattened image ``rgb`` [h w, 3], written there in
+    turn) in the colour of its part from the owner's ``palette`` [n, 4, 3], looked up here rather than gathered."""
+    for h in range(len(pixel)):
+        light = _light(normal, view, h)
+        for c in range(3):
+            rgb[pixel[h], c] = np.uint8(255 * min(max(palette[owner[h], part[h], c] * light, 0.0), 1.0))
 
 
 def make_renderer(scene: Scene, intrinsics: Intrinsics, exclude_body: int = -1, rgb: bool = False,
@@ -402,13 +429,60 @@ def kinect_noise(depth: np.ndarray, rng: np.random.Generator, camera: DepthCamer
     """The depth error of a structured-light camera after Khoshelham & Elberink 2012 (Sensors 12(2) 1437-1454):
     Gaussian with sigma ``noise_sigma`` z^2, then the depth quantized through the disparity, measured in steps of
     1 / ``disparity_subpixel`` pixel by an IR camera of focal length ``ir_focal_px`` on a baseline ``ir_baseline``
-    (the camera's scenario keys; the Kinect's by default)."""
-    seen = np.isfinite(depth)
-    z = np.where(seen, depth, 0.0)
-    noisy = z + rng.standard_normal(depth.shape) * (camera.noise_sigma * z * z)
+    (the camera's scenario keys; the Kinect's by default). One standard normal draw per pixel, seen or not."""
+    draws = rng.standard_normal(depth.shape)
+    if depth.dtype != np.float32:
+        raise ValueError(f"depth must be float32 (as rendered), not {depth.dtype}")
     fb = camera.ir_focal_px * camera.ir_baseline * camera.disparity_subpixel
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(seen, fb / np.round(fb / noisy), np.inf).astype(np.float32)
+    return _kinect(depth.ravel(), draws.ravel(), np.float32(camera.noise_sigma), fb).reshape(depth.shape)
+
+
+@kernel
+def _kinect(depth, draws, sigma, fb):
+    """``kinect_noise`` on the float32 depths (inf: nothing seen) and their draws: sigma z^2 in float32 (as numpy
+    takes a float32 array times a Python float), the noisy depth and its quantization in float64, rounding half to
+    even; inf where nothing was seen."""
+    out = np.empty(len(depth), np.float32)
+    for i in range(len(depth)):
+        z = depth[i]
+        if np.isfinite(z):
+            noisy = np.float64(z) + draws[i] * np.float64(sigma * z * z)
+            out[i] = np.float32(fb / np.round(fb / noisy))
+        else:
+            out[i] = np.inf
+    return out
+
+
+def measured(z: np.ndarray, rays: np.ndarray, range_min: float, range_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """The depth camera's float32 z-depths [h, w] with NaN outside [range_min, range_max] (compared in float32, as
+    numpy compares a float32 array with a Python float), and the valid pixels' points [n, 3]: their rays [h, w, 3]
+    (z = 1) scaled by the depth, row by row."""
+    if z.dtype != np.float32 or rays.shape != (*z.shape, 3):
+        raise ValueError(f"z must be float32 [h, w] and rays [h, w, 3], not {z.dtype} {z.shape} and {rays.shape}")
+    depth, points = _measured(z.ravel(), np.ascontiguousarray(rays, np.float64).reshape(-1, 3), np.float32(range_min),
+                              np.float32(range_max))
+    return depth.reshape(z.shape), points
+
+
+@kernel
+def _measured(z, rays, range_min, range_max):
+    """``measured`` on the flattened image."""
+    depth = np.empty(len(z), np.float32)
+    valid = 0
+    for i in range(len(z)):
+        if z[i] >= range_min and z[i] <= range_max:
+            depth[i] = z[i]
+            valid += 1
+        else:
+            depth[i] = np.nan
+    points = np.empty((valid, 3))
+    k = 0
+    for i in range(len(z)):
+        if depth[i] == depth[i]:
+            scale = np.float64(depth[i])
+            points[k, 0], points[k, 1], points[k, 2] = rays[i, 0] * scale, rays[i, 1] * scale, rays[i, 2] * scale
+            k += 1
+    return depth, points
 
 
 class CameraSensor(Periodic):
@@ -509,12 +583,10 @@ class DepthCamera(CameraSensor):
         z = out["depth"]
         if self.noise == "kinect":
             z = kinect_noise(z, self.rng, self)
-        valid = (z >= self.range_min) & (z <= self.range_max)
-        z = np.where(valid, z, np.nan).astype(np.float32)
-        points = self._rays[valid] * z[valid][:, None]
+        z, points = measured(z, self._rays, self.range_min, self.range_max)
         # person ids where the camera measured something: beyond its range it sees no one (and the GL renderer
         # does not even draw people there)
-        person = np.where(valid, self.scene.person_of_geom(out["geom"]), -1)
+        person = np.where(np.isnan(z), -1, self.scene.person_of_geom(out["geom"]))
         return DepthFrame(stamp, self.name, z, points, person, out.get("rgb"),
                           camera_matrix=self.intrinsics.camera_matrix)
 
@@ -602,8 +674,8 @@ class WallCamera(CameraSensor):
             view = k.rays(u[shows], v[shows]) @ rot.T
             sl, pt = slots[owner[shows]], part[shows]
             surface = bodycast.normals(s, sl, pt, origin + z[shows, None] * view)
-            colour = bodycast.colours(s.slot_person_id[slots])[owner[shows], pt]  # a palette per person, looked up
-            rgb.reshape(-1, 3)[pixel[shows]] = shade(colour, surface, view)
+            palette = bodycast.colours(s.slot_person_id[slots])  # [n, 4, 3]: each person's parts' colours
+            _shade_people(rgb.reshape(-1, 3), pixel[shows], owner[shows], pt, palette, surface, view)
         # per person: the pixels that show against all of the silhouette's
         full = np.bincount(owner, weights=weight, minlength=len(slots))
         seen = np.bincount(owner[shows], minlength=len(slots))
@@ -657,37 +729,103 @@ def person_pixels(scene: Scene, camera: str, intrinsics: Intrinsics, slots: np.n
     slots = np.asarray(slots, np.int64)
     corners = bodycast.part_box_corners(scene, slots)
     cam = (corners - origin) @ rot
-    in_front = (cam[..., 2] > 1e-3).all(axis=1)
-    uv = k.project(np.where(in_front[:, None, None], cam, 1.0).reshape(-1, 3)).reshape(len(slots), 4, 8, 2)
-    reach_lo, reach_hi = [-k.width, -k.height], [2 * k.width, 2 * k.height]
-    part_lo = np.clip(np.floor(uv.min(axis=2)), reach_lo, reach_hi).astype(np.int64)  # [n, 4 parts, 2]
-    part_hi = np.clip(np.ceil(uv.max(axis=2)), reach_lo, reach_hi).astype(np.int64)
-    cast = in_front & (part_hi.max(axis=1) > 0).all(axis=1) & (part_lo.min(axis=1) < [k.width, k.height]).all(axis=1)
     cx, cy = k.centre
-    return bodycast.nearest_parts(origin, rot, k.f, cx, cy, k.width, k.height, part_lo, part_hi, cast,
+    f = k.f
+    part_lo, part_hi, cast = _part_boxes(cam, f, cx, cy, k.width, k.height)
+    return bodycast.nearest_parts(origin, rot, f, cx, cy, k.width, k.height, part_lo, part_hi, cast,
                                   *bodycast.bodies(scene, slots), not body.HIP_INSIDE_TORSO)
+
+
+@kernel
+def _part_boxes(cam, f, cx, cy, width, height):
+    """The pixel boxes [lo, hi) [n, 4, 2] of the projections of each person's part boxes, whose corners [n, 32, 3]
+    in the optical frame are ``cam``, clipped to one image size beyond the border; and which persons to cast: those
+    wholly in front of the camera whose box meets the image (a person partly behind it gets the boxes of corners
+    at (1, 1, 1), never cast)."""
+    n = len(cam)
+    part_lo, part_hi = np.empty((n, 4, 2), np.int64), np.empty((n, 4, 2), np.int64)
+    cast = np.empty(n, np.bool_)
+    reach_lo, reach_hi = (-width, -height), (2 * width, 2 * height)
+    for i in range(n):
+        in_front = True
+        for c in range(32):
+            in_front = in_front and cam[i, c, 2] > 1e-3
+        for part in range(4):
+            lo, hi = [np.inf, np.inf], [-np.inf, -np.inf]
+            for c in range(8 * part, 8 * part + 8):
+                x, y, z = (cam[i, c, 0], cam[i, c, 1], cam[i, c, 2]) if in_front else (1.0, 1.0, 1.0)
+                u, v = cx + f * x / z, cy + f * y / z
+                lo[0], lo[1], hi[0], hi[1] = min(lo[0], u), min(lo[1], v), max(hi[0], u), max(hi[1], v)
+            for a in range(2):
+                part_lo[i, part, a] = np.int64(min(max(np.floor(lo[a]), reach_lo[a]), reach_hi[a]))
+                part_hi[i, part, a] = np.int64(min(max(np.ceil(hi[a]), reach_lo[a]), reach_hi[a]))
+        meets = True
+        for a in range(2):
+            top, bottom = part_hi[i, 0, a], part_lo[i, 0, a]
+            for part in range(1, 4):
+                top, bottom = max(top, part_hi[i, part, a]), min(bottom, part_lo[i, part, a])
+            meets = meets and top > 0 and bottom < (width, height)[a]
+        cast[i] = in_front and meets
+    return part_lo, part_hi, cast
 
 
 def person_boxes(scene: Scene, camera: str, intrinsics: Intrinsics, seg: np.ndarray):
     """For every person a segmentation image shows: id, box around the visible pixels, box around the person as it
     would show with nobody and nothing in front and no image border (so it may reach outside the image), and the
     share of those pixels that show."""
-    v, u = np.nonzero(seg >= 0)
-    ids, owner, counts = np.unique(seg[v, u], return_inverse=True, return_counts=True)
+    seg = np.asarray(seg, np.int64)
+    if seg.ndim != 2:
+        raise ValueError(f"seg must be an image [h, w] of person ids, not of shape {seg.shape}")
+    ids, boxes, counts = _segments(seg)
     full_owner, fu, fv, _, _, weight = person_pixels(scene, camera, intrinsics, scene.slots_of(ids))
     full = np.bincount(full_owner, weights=weight, minlength=len(ids))
-    return (ids, _boxes_of(owner, u, v, len(ids)), _boxes_of(full_owner, fu, fv, len(ids)),
-            np.minimum(counts / np.maximum(full, 1), 1.0))
+    return ids, boxes, _boxes_of(full_owner, fu, fv, len(ids)), np.minimum(counts / np.maximum(full, 1), 1.0)
 
 
-def _boxes_of(owner: np.ndarray, u: np.ndarray, v: np.ndarray, n: int) -> np.ndarray:
-    """(u0, v0, u1, v1) around each owner's pixels (zeros for an owner without any)."""
+@kernel
+def _segments(seg):
+    """The ids >= 0 a segmentation image [h, w] shows (sorted), the box round each one's pixels and their count."""
+    height, width = seg.shape
+    shown = 0
+    for v in range(height):
+        for u in range(width):
+            shown += seg[v, u] >= 0
+    values, us, vs = np.empty(shown, np.int64), np.empty(shown, np.int64), np.empty(shown, np.int64)
+    k = 0
+    for v in range(height):
+        for u in range(width):
+            if seg[v, u] >= 0:
+                values[k], us[k], vs[k] = seg[v, u], u, v
+                k += 1
+    ordered = np.sort(values)
+    distinct = 0
+    for k in range(shown):
+        distinct += k == 0 or ordered[k] != ordered[k - 1]
+    ids = np.empty(distinct, np.int64)
+    distinct = 0
+    for k in range(shown):
+        if k == 0 or ordered[k] != ordered[k - 1]:
+            ids[distinct] = ordered[k]
+            distinct += 1
+    owner = np.searchsorted(ids, values)
+    counts = np.zeros(distinct, np.int64)
+    for k in range(shown):
+        counts[owner[k]] += 1
+    return ids, _boxes_of(owner, us, vs, distinct), counts
+
+
+@kernel
+def _boxes_of(owner, u, v, n):
+    """(u0, v0, u1, v1) around each owner's pixels (zeros for an owner without any): one pass over the pixels, in
+    place of numpy's sort and reductions (nine calls on arrays of a few thousand)."""
     boxes = np.zeros((n, 4))
-    if len(owner):
-        if (np.diff(owner) < 0).any():
-            order = np.argsort(owner, kind="stable")
-            owner, u, v = owner[order], u[order], v[order]
-        starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
-        boxes[owner[starts]] = np.stack([np.minimum.reduceat(u, starts), np.minimum.reduceat(v, starts),
-                                         np.maximum.reduceat(u, starts) + 1, np.maximum.reduceat(v, starts) + 1], 1)
+    seen = np.zeros(n, np.bool_)
+    for k in range(len(owner)):
+        i = owner[k]
+        if not seen[i]:
+            seen[i] = True
+            boxes[i, 0], boxes[i, 1], boxes[i, 2], boxes[i, 3] = u[k], v[k], u[k] + 1, v[k] + 1
+        else:
+            boxes[i, 0], boxes[i, 1] = min(boxes[i, 0], u[k]), min(boxes[i, 1], v[k])
+            boxes[i, 2], boxes[i, 3] = max(boxes[i, 2], u[k] + 1), max(boxes[i, 3], v[k] + 1)
     return boxes

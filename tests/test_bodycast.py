@@ -134,3 +134,23 @@ def test_the_hip_end_of_a_leg_lies_inside_the_torso():
     t_torso = cast(bodycast.ray_vertical_cylinder, origin, target - origin, F(body.TORSO_RADIUS),
                    F(body.TORSO_BOTTOM), F(body.TORSO_TOP))
     assert np.isfinite(t_hip).all() and (t_torso <= t_hip).all()
+
+
+def test_part_box_corners_of_a_standing_adult():
+    # an adult at (2, 3), legs straight: the torso's box is its cylinder's, the head's its sphere's, each leg's the
+    # box round its axis from hip to foot grown by its radius
+    scene = Scene(np.zeros((0, 2, 2)), 0.425, 1)
+    scene.sync(np.array([-20.0, 0.0, 0.0]), np.array([1]), np.array([[2.0, 3.0]]))
+    corners = bodycast.part_box_corners(scene, np.array([0]))[0]
+    r, h = body.TORSO_RADIUS, body.HEAD_RADIUS
+    np.testing.assert_allclose(corners[:8].min(axis=0), [2 - r, 3 - r, body.TORSO_BOTTOM], atol=1e-12)
+    np.testing.assert_allclose(corners[:8].max(axis=0), [2 + r, 3 + r, body.TORSO_TOP], atol=1e-12)
+    np.testing.assert_allclose(corners[8], [2 - h, 3 - h, body.HEAD_CENTRE - h], atol=1e-12)  # corner (-1, -1, -1)
+    np.testing.assert_allclose(corners[15], [2 + h, 3 + h, body.HEAD_CENTRE + h], atol=1e-12)
+    for leg in (0, 1):
+        ends = np.stack([scene.hips[0, leg], scene.feet[0, leg]])
+        box = corners[16 + 8 * leg:24 + 8 * leg]
+        np.testing.assert_allclose(box.min(axis=0), ends.min(axis=0) - body.LEG_RADIUS, atol=1e-12)
+        np.testing.assert_allclose(box.max(axis=0), ends.max(axis=0) + body.LEG_RADIUS, atol=1e-12)
+    with pytest.raises(ValueError, match="slot"):
+        bodycast.part_box_corners(scene, np.array([5]))

@@ -316,3 +316,86 @@ def test_a_fixed_renderer_refuses_people():
         RaycastRenderer(scene, k, people=True, fixed=True)
     with pytest.raises(ValueError, match="no people"):
         GLRenderer(scene, k, people=True, fixed=True)
+
+
+def test_boxes_of_owners_pixels_in_any_order():
+    # owner 0 has pixels (3, 5), (1, 7): box u 1..4, v 5..8; owner 2 one pixel (6, 0); owner 1 none
+    from sensors.camera import _boxes_of
+    boxes = _boxes_of(np.array([0, 2, 0]), np.array([3, 6, 1]), np.array([5, 0, 7]), 3)
+    np.testing.assert_array_equal(boxes, [[1, 5, 4, 8], [0, 0, 0, 0], [6, 0, 7, 1]])
+
+
+def test_kinect_noise_on_worked_depths():
+    # f b s = 580 x 0.075 x 8 = 348: z 2.0 with draw 0 -> 348 / round(174) = 2.0; z 3.0 with draw 1 and sigma 0.01
+    # (sigma z^2 = 0.09 in float32) -> 3.09 -> 348 / round(112.62) = 348 / 113; nothing seen stays inf
+    from types import SimpleNamespace
+
+    from sensors.camera import _kinect
+    camera = SimpleNamespace(ir_focal_px=580.0, ir_baseline=0.075, disparity_subpixel=8)
+    fb = camera.ir_focal_px * camera.ir_baseline * camera.disparity_subpixel
+    out = _kinect(np.array([2.0, 3.0, np.inf], np.float32), np.array([0.0, 1.0, 5.0]), np.float32(0.01), fb)
+    assert out.dtype == np.float32
+    np.testing.assert_array_equal(out, np.array([fb / 174, fb / 113, np.inf], np.float32))
+
+
+def test_measured_depths_keep_the_range_and_scale_the_rays():
+    # range [0.5, 8]: 0.4 and 9 read NaN; the points are the valid pixels' rays times their depth, row by row
+    from sensors.camera import measured
+    z = np.array([[0.4, 2.0], [9.0, 8.0]], np.float32)
+    rays = np.array([[[0.0, 0.0, 1.0], [0.5, -0.25, 1.0]], [[1.0, 1.0, 1.0], [-0.5, 0.0, 1.0]]])
+    depth, points = measured(z, rays, 0.5, 8.0)
+    np.testing.assert_array_equal(depth, np.array([[np.nan, 2.0], [np.nan, 8.0]], np.float32))
+    np.testing.assert_array_equal(points, [[1.0, -0.5, 2.0], [-4.0, 0.0, 8.0]])
+    with pytest.raises(ValueError, match="float32"):
+        measured(z.astype(float), rays, 0.5, 8.0)
+
+
+def test_gl_depth_buffer_to_metres():
+    # near 1, far 3: b 0 -> 1 m, b 0.5 -> 3 / (3 - 1) = 1.5 m, b 1 (nothing drawn) -> inf
+    from sensors.camera import _gl_depth
+    np.testing.assert_array_equal(_gl_depth(np.array([[0.0, 0.5, 1.0]], np.float32), 3.0, 3.0, 2.0),
+                                  np.array([[1.0, 1.5, np.inf]], np.float32))
+
+
+def test_people_shaded_in_their_parts_colours_where_they_show():
+    # person 1's head (part 1) at pixel 2 facing the eye: its colour at full strength; person 0's torso at pixel 0
+    # edge-on: 0.35 of it; pixel 1 untouched
+    from sensors.camera import _shade_people
+    rgb = np.zeros((3, 3), np.uint8)
+    palette = np.zeros((2, 4, 3))
+    palette[1, 1], palette[0, 0] = [0.5, 1.0, 0.2], [1.0, 1.0, 1.0]
+    normal = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    view = np.array([[2.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    _shade_people(rgb, np.array([2, 0]), np.array([1, 0]), np.array([1, 0]), palette, normal, view)
+    np.testing.assert_array_equal(rgb, [[89, 89, 89], [0, 0, 0], [127, 255, 51]])
+
+
+def test_part_boxes_of_projected_corners():
+    # f 10, centre (4, 3), image 8 x 6; a person whose 32 corners lie at x in [-0.1, 0.1], y in [0, 0.2], z 1 (part 0
+    # also at x 0.25): u 3..5 (part 0: 3..7), v 3..5; one with a corner behind the camera is not cast; one far left
+    # of the image (u -16 clipped to -8 .. -6) is not cast either
+    from sensors.camera import _part_boxes
+    cam = np.zeros((3, 32, 3))
+    cam[0, :, 0], cam[0, :, 1], cam[0, :, 2] = np.tile([-0.1, 0.1], 16), np.tile([0.0, 0.0, 0.2, 0.2], 8), 1.0
+    cam[0, 3, 0] = 0.25
+    cam[1] = cam[0]
+    cam[1, 5, 2] = -1.0
+    cam[2] = cam[0]
+    cam[2, :, 0] = -2.0
+    lo, hi, cast = _part_boxes(cam, 10.0, 4.0, 3.0, 8, 6)
+    np.testing.assert_array_equal(lo[0], [[3, 3]] * 4)
+    np.testing.assert_array_equal(hi[0], [[7, 5]] + [[5, 5]] * 3)
+    np.testing.assert_array_equal(lo[1], [[14, 12]] * 4)  # corners at (1, 1, 1): u 4 + 10, v 3 + 10 clipped to 12
+    np.testing.assert_array_equal(lo[2, :, 0], [-8] * 4)
+    np.testing.assert_array_equal(hi[2, :, 0], [-8] * 4)
+    np.testing.assert_array_equal(cast, [True, False, False])
+
+
+def test_segments_of_a_segmentation_image():
+    # person 7 at (0, 0) and (2, 1); person 3 at (1, 0): sorted ids, boxes (u0, v0, u1, v1) and pixel counts
+    from sensors.camera import _segments
+    seg = np.array([[7, 3, -1], [-1, -1, 7]])
+    ids, boxes, counts = _segments(seg)
+    np.testing.assert_array_equal(ids, [3, 7])
+    np.testing.assert_array_equal(boxes, [[1, 0, 2, 1], [0, 0, 3, 2]])
+    np.testing.assert_array_equal(counts, [1, 2])
