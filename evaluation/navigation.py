@@ -19,16 +19,23 @@ the social and passers-by figures, which concern the people the robot shares the
 the target.
 
 Each figure, its unit and its source are in ``navigation_metrics``'s docstring and in docs/navigation-metrics.md.
+
+An environment scores every episode it ends (thousands a minute), where numpy's per-call cost on a few thousand rows
+was the time: the figures are kernels (``pipeline.compiled``) doing numpy's arithmetic in numpy's order (its
+pairwise sums, its median and gradient), so they are the bits the numpy code gave; the angles and exponentials of
+the social force stay numpy's calls, one each, since numba's differ in the last bit.
 """
 
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from pipeline.compiled import by_label, kernel, pairwise
 from pipeline.frames import wrap_angle
 
 from .columns import FOLLOWING, PERSONS, ROBOT
@@ -48,7 +55,6 @@ CROSSING_RANGE = 3.6
 # sfm.hpp): Moussaid et al. 2009's pedestrian interaction with lightsfm's weight; the obstacle force of lightsfm.
 SFM_SOCIAL, SFM_LAMBDA, SFM_GAMMA, SFM_N, SFM_N_PRIME = 2.1, 2.0, 0.35, 2.0, 3.0
 SFM_OBSTACLE, SFM_OBSTACLE_SIGMA = 10.0, 0.2  # m/s^2, m
-WALL_CHUNK = 1 << 20  # frame-wall distances computed at once (8 MB a temporary), whatever the run's length
 
 
 @dataclass
@@ -119,170 +125,368 @@ class NavEpisode:
             raise ValueError(f"NavEpisode.task must be 'goal' or 'follow', got {self.task!r}")
 
 
-def _first(mask: np.ndarray) -> int | None:
-    k = np.flatnonzero(mask)
-    return int(k[0]) if k.size else None
+@kernel
+def _least(a, b):
+    """numpy's minimum of two numbers: NaN when either is."""
+    return a if a < b or a != a else b
 
 
-def _wall_distance(xy: np.ndarray, walls: np.ndarray) -> np.ndarray:
-    """Each point's distance (m) to the nearest wall segment; inf without walls. Chunks of points keep the
-    point-wall table small."""
+@kernel
+def _mean_peak(values):
+    """Mean and largest |value| (the mean a pairwise sum over the count, as numpy's); NaN for none."""
+    if len(values) == 0:
+        return np.nan, np.nan
+    a = np.abs(values)
+    peak = a[0]
+    for v in a:
+        peak = v if v > peak or v != v else peak
+    return pairwise(a, 0, len(a)) / len(a), peak
+
+
+@kernel
+def _person_gaps(frame, position, radius, robot_xy, robot_radius, frames):
+    """Each person row's gap to the robot's disc (centre distance minus both radii), and per frame the least (inf
+    in a frame without rows)."""
+    gap, least = np.empty(len(frame)), np.full(frames, np.inf)
+    for i in range(len(frame)):
+        f = frame[i]
+        gap[i] = math.hypot(position[i, 0] - robot_xy[f, 0], position[i, 1] - robot_xy[f, 1]) - radius[i] \
+            - robot_radius
+        least[f] = _least(least[f], gap[i])
+    return gap, least
+
+
+@kernel
+def _wall_distance(xy, walls):
+    """Each point's distance (m) to the nearest wall segment [W, 2, 2] (a zero-length segment is its point); inf
+    without walls."""
     out = np.full(len(xy), np.inf)
-    if not len(walls):
-        return out
-    a, ab = walls[:, 0], walls[:, 1] - walls[:, 0]
-    ab2 = np.maximum((ab * ab).sum(-1), 1e-18)  # a zero-length segment is its point
-    step = max(1, WALL_CHUNK // len(walls))
-    for lo in range(0, len(xy), step):
-        ap = xy[lo:lo + step, None, :] - a
-        s = np.clip((ap * ab).sum(-1) / ab2, 0.0, 1.0)
-        out[lo:lo + step] = np.hypot(*np.moveaxis(ap - s[..., None] * ab, -1, 0)).min(axis=1)
+    for w in range(len(walls)):
+        ax, ay = walls[w, 0, 0], walls[w, 0, 1]
+        bx, by = walls[w, 1, 0] - ax, walls[w, 1, 1] - ay
+        ab2 = max(bx * bx + by * by, 1e-18)
+        for i in range(len(xy)):
+            px, py = xy[i, 0] - ax, xy[i, 1] - ay
+            s = min(max((px * bx + py * by) / ab2, 0.0), 1.0)
+            out[i] = _least(out[i], math.hypot(px - s * bx, py - s * by))
     return out
 
 
-def _frame_min(values: np.ndarray, frame: np.ndarray, frames: int) -> np.ndarray:
-    """Per frame the smallest of its rows' values; inf in a frame without rows."""
-    out = np.full(frames, np.inf)
-    np.minimum.at(out, frame, values)
-    return out
+@kernel
+def _end_frames(stamp, robot_xy, goal, goal_radius, time_limit, person_gap_min, wall_gap):
+    """``_outcome``'s frames: the last within the time limit, the log's median frame interval, the first collision
+    and the first at the goal (-1: none; no goal when ``goal`` is empty) within the limit."""
+    last, collided, reached = 0, -1, -1
+    for i in range(len(stamp)):
+        if stamp[i] - stamp[0] <= time_limit + 1e-9:
+            last = i
+            if collided < 0 and (person_gap_min[i] < 0 or wall_gap[i] < 0):
+                collided = i
+            if reached < 0 and len(goal) and math.hypot(robot_xy[i, 0] - goal[0],
+                                                         robot_xy[i, 1] - goal[1]) <= goal_radius:
+                reached = i
+    steps = np.sort(stamp[1:] - stamp[:-1])
+    m = len(steps)
+    if m == 0:
+        dt = 0.0
+    elif steps[m - 1] != steps[m - 1]:  # np.median: NaN when any is (sorted last)
+        dt = np.nan
+    elif m % 2:
+        dt = steps[m // 2]
+    else:
+        dt = (steps[m // 2 - 1] + steps[m // 2]) / 2.0
+    return last, dt, collided, reached
 
 
 def _outcome(ep: NavEpisode, person_gap_min: np.ndarray, wall_gap: np.ndarray) -> tuple[int, dict]:
     """The episode's last frame and its outcome. A collision: the robot's disc overlaps a person's or a wall
     (gap < 0). The log covers the time limit when its last frame is within one frame interval of it."""
-    elapsed = ep.stamp - ep.stamp[0]
-    within = elapsed <= ep.time_limit + 1e-9
-    last = int(np.flatnonzero(within)[-1])
-    dt = float(np.median(np.diff(ep.stamp))) if len(ep.stamp) > 1 else 0.0
-    covers = elapsed[last] >= ep.time_limit - dt - 1e-9
-    collided = ((person_gap_min < 0) | (wall_gap < 0)) & within
-    c = _first(collided)
-    g = _first((np.hypot(*(ep.robot_pose[:, :2] - ep.goal).T) <= ep.goal_radius) & within) \
-        if ep.task == "goal" else None
-    success = g is not None and (c is None or g < c)
-    end = g if success else c if c is not None else last
-    out = {"success": bool(success or (ep.task == "follow" and c is None and covers)),
-           "collision_person": bool(not success and c is not None and person_gap_min[c] < 0),
-           "collision_wall": bool(not success and c is not None and wall_gap[c] < 0),
-           "timeout": bool(ep.task == "goal" and not success and c is None and covers),
-           "ended_early": bool(not success and c is None and not covers),
-           "time_to_goal": float(elapsed[g]) if success else float("nan")}
+    goal = ep.goal if ep.task == "goal" else np.zeros(0)
+    last, dt, c, g = _end_frames(ep.stamp, ep.robot_pose, goal, ep.goal_radius, ep.time_limit, person_gap_min,
+                                 wall_gap)
+    covers = ep.stamp[last] - ep.stamp[0] >= ep.time_limit - dt - 1e-9
+    success = g >= 0 and (c < 0 or g < c)
+    end = g if success else c if c >= 0 else last
+    out = {"success": bool(success or (ep.task == "follow" and c < 0 and covers)),
+           "collision_person": bool(not success and c >= 0 and person_gap_min[c] < 0),
+           "collision_wall": bool(not success and c >= 0 and wall_gap[c] < 0),
+           "timeout": bool(ep.task == "goal" and not success and c < 0 and covers),
+           "ended_early": bool(not success and c < 0 and not covers),
+           "time_to_goal": float(ep.stamp[g] - ep.stamp[0]) if success else float("nan")}
     return end, out
 
 
-def _derivative(values: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Finite differences of samples at times ``t``: the rates and the midpoints they belong to."""
-    return np.diff(values) / np.diff(t), 0.5 * (t[1:] + t[:-1])
-
-
-def _mean_peak(values: np.ndarray) -> tuple[float, float]:
-    a = np.abs(values)
-    return (float(a.mean()), float(a.max())) if a.size else (float("nan"), float("nan"))
-
-
-def _smoothness(stamp: np.ndarray, pose: np.ndarray) -> dict:
-    """Acceleration and jerk of the path speed and of the yaw rate, by finite differences of the log."""
-    out = {}
-    dt, t1 = np.diff(stamp), 0.5 * (stamp[1:] + stamp[:-1])
-    speed = np.hypot(*np.diff(pose[:, :2], axis=0).T) / dt
-    turn = wrap_angle(np.diff(pose[:, 2])) / dt
-    for name, rate in (("linear", speed), ("angular", turn)):
-        acc, t2 = _derivative(rate, t1)
-        jerk, _ = _derivative(acc, t2)
-        out[f"mean_{name}_acceleration"], out[f"peak_{name}_acceleration"] = _mean_peak(acc)
-        out[f"mean_{name}_jerk"], out[f"peak_{name}_jerk"] = _mean_peak(jerk)
+@kernel
+def _path(stamp, pose, n):
+    """Over frames 0..n-1 (n >= 1): the path length, the total rotation sum |wrap(dyaw)|, and the smoothness
+    figures (``SMOOTHNESS_KEYS``' order): acceleration and jerk of the path speed |p_k+1 - p_k| / dt and of the
+    yaw rate wrap(dyaw) / dt, by finite differences at the intervals' midpoints."""
+    m = n - 1
+    step, turn, rates, mid = np.empty(m), np.empty(m), np.empty((2, m)), np.empty(m)
+    for i in range(m):
+        dt = stamp[i + 1] - stamp[i]
+        step[i] = math.hypot(pose[i + 1, 0] - pose[i, 0], pose[i + 1, 1] - pose[i, 1])
+        dyaw = wrap_angle(pose[i + 1, 2] - pose[i, 2])
+        turn[i] = abs(dyaw)
+        rates[0, i], rates[1, i] = step[i] / dt, dyaw / dt
+        mid[i] = 0.5 * (stamp[i + 1] + stamp[i])
+    out = np.empty(10)
+    out[0], out[1] = pairwise(step, 0, m), pairwise(turn, 0, m)
+    m1, m2 = max(m - 1, 0), max(m - 2, 0)
+    mid2 = np.empty(m1)
+    for i in range(m1):
+        mid2[i] = 0.5 * (mid[i + 1] + mid[i])
+    for r in range(2):
+        acc, jerk = np.empty(m1), np.empty(m2)
+        for i in range(m1):
+            acc[i] = (rates[r, i + 1] - rates[r, i]) / (mid[i + 1] - mid[i])
+        for i in range(m2):
+            jerk[i] = (acc[i + 1] - acc[i]) / (mid2[i + 1] - mid2[i])
+        out[2 + 4 * r], out[3 + 4 * r] = _mean_peak(acc)
+        out[4 + 4 * r], out[5 + 4 * r] = _mean_peak(jerk)
     return out
 
 
-def _time_to_collision(rel_p: np.ndarray, rel_v: np.ndarray, radii: np.ndarray) -> np.ndarray:
-    """Seconds until two discs (relative position and velocity of one from the other, sum of radii) touch moving at
-    constant velocity: the smallest tau >= 0 with |rel_p + tau rel_v| = radii; 0 when they overlap, inf if never."""
-    a = (rel_v * rel_v).sum(-1)
-    b = (rel_p * rel_v).sum(-1)  # half of the quadratic's b
-    c = (rel_p * rel_p).sum(-1) - radii ** 2
+SMOOTHNESS_KEYS = tuple(f"{kind}_{name}_{rate}" for name in ("linear", "angular") for rate in ("acceleration", "jerk")
+                        for kind in ("mean", "peak"))
+
+
+@kernel
+def _gradient(xy, stamp, n):
+    """``np.gradient(xy[:n], stamp[:n], axis=0)`` (n >= 2), its arithmetic: central differences inside (numpy's
+    non-uniform formula unless every interval equals the first), one-sided at the ends."""
+    out = np.empty((n, 2))
+    dx0 = stamp[1] - stamp[0]
+    uniform = True
+    for i in range(1, n - 1):
+        uniform = uniform and stamp[i + 1] - stamp[i] == dx0
+    for i in range(1, n - 1):
+        for j in range(2):
+            if uniform:
+                out[i, j] = (xy[i + 1, j] - xy[i - 1, j]) / (2. * dx0)
+            else:
+                dx1, dx2 = stamp[i] - stamp[i - 1], stamp[i + 1] - stamp[i]
+                a = -dx2 / (dx1 * (dx1 + dx2))
+                b = (dx2 - dx1) / (dx1 * dx2)
+                c = dx1 / (dx2 * (dx1 + dx2))
+                out[i, j] = a * xy[i - 1, j] + b * xy[i, j] + c * xy[i + 1, j]
+    dxn = dx0 if uniform else stamp[n - 1] - stamp[n - 2]
+    for j in range(2):
+        out[0, j] = (xy[1, j] - xy[0, j]) / dx0
+        out[n - 1, j] = (xy[n - 1, j] - xy[n - 2, j]) / dxn
+    return out
+
+
+@kernel
+def _time_to_collision(px, py, vx, vy, radii):
+    """Seconds until two discs (relative position p and velocity v of one from the other, sum of radii) touch moving at
+    constant velocity: the smallest tau >= 0 with |p + tau v| = radii; 0 when they overlap, inf if never."""
+    a = vx * vx + vy * vy
+    b = px * vx + py * vy  # half of the quadratic's b
+    c = (px * px + py * py) - radii * radii
+    if c <= 0:
+        return 0.0
     disc = b * b - a * c
-    closing = (a > 0) & (b < 0) & (disc >= 0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        tau = np.where(closing, (-b - np.sqrt(np.maximum(disc, 0.0))) / a, np.inf)
-    return np.where(c <= 0, 0.0, tau)
+    if a > 0 and b < 0 and disc >= 0:
+        return (-b - math.sqrt(disc)) / a
+    return np.inf
+
+
+@kernel
+def _social(rows, frame, position, velocity, radius, gap, robot_xy, robot_v, robot_radius, frames):
+    """Over person ``rows``: the least gap and the least time to collision (``_time_to_collision``; inf without
+    rows), and the counts of frames whose least gap is below DISCOMFORT_GAP, below INTIMATE_GAP, and from it to
+    PERSONAL_GAP (a frame without rows in none)."""
+    least, closest, soonest = np.full(frames, np.inf), np.inf, np.inf
+    for i in rows:
+        f = frame[i]
+        least[f], closest = _least(least[f], gap[i]), _least(closest, gap[i])
+        px, py = position[i, 0] - robot_xy[f, 0], position[i, 1] - robot_xy[f, 1]
+        vx, vy = velocity[i, 0] - robot_v[f, 0], velocity[i, 1] - robot_v[f, 1]
+        soonest = _least(soonest, _time_to_collision(px, py, vx, vy, radius[i] + robot_radius))
+    discomfort = intimate = personal = 0
+    for g in least:
+        discomfort += g < DISCOMFORT_GAP
+        intimate += g < INTIMATE_GAP
+        personal += INTIMATE_GAP <= g < PERSONAL_GAP
+    return closest, soonest, discomfort, intimate, personal
+
+
+@kernel
+def _force_geometry(pos_a, vel_a, pos_b, vel_b):
+    """``social_force``'s geometry, row by row: the centre distance d, B = gamma |I|, the unit vector t of I, and the
+    arguments (y [2, M], x [2, M]) of the angles of e and of t."""
+    m = len(pos_a)
+    d, b, t, y, x = np.empty(m), np.empty(m), np.empty((m, 2)), np.empty((2, m)), np.empty((2, m))
+    for i in range(m):
+        dx, dy = pos_a[i, 0] - pos_b[i, 0], pos_a[i, 1] - pos_b[i, 1]
+        d[i] = math.hypot(dx, dy)
+        ex, ey = dx / max(d[i], 1e-12), dy / max(d[i], 1e-12)
+        ix = SFM_LAMBDA * (vel_b[i, 0] - vel_a[i, 0]) + ex
+        iy = SFM_LAMBDA * (vel_b[i, 1] - vel_a[i, 1]) + ey
+        length = max(math.hypot(ix, iy), 1e-12)
+        t[i, 0], t[i, 1] = ix / length, iy / length
+        b[i] = SFM_GAMMA * length
+        y[0, i], x[0, i], y[1, i], x[1, i] = ey, ex, t[i, 1], t[i, 0]
+    return d, b, t, y, x
+
+
+@kernel
+def _force_exponents(angle, d, b):
+    """theta (the angle from t to e, wrapped) and the exponents [2, M] of the force along t and across it."""
+    m = len(d)
+    theta, exponent = np.empty(m), np.empty((2, m))
+    for i in range(m):
+        theta[i] = wrap_angle(angle[0, i] - angle[1, i])
+        exponent[0, i] = -d[i] / b[i] - (SFM_N_PRIME * b[i] * theta[i]) ** 2
+        exponent[1, i] = -d[i] / b[i] - (SFM_N * b[i] * theta[i]) ** 2
+    return theta, exponent
+
+
+@kernel
+def _force(theta, falloff, t):
+    """-A [exp(-(n' B theta)^2 - d / B) t + sign(theta) exp(-(n B theta)^2 - d / B) t_left], from the exponentials."""
+    out = np.empty((len(theta), 2))
+    for i in range(len(theta)):
+        along, across = -falloff[0, i], -np.sign(theta[i]) * falloff[1, i]
+        out[i, 0] = SFM_SOCIAL * (along * t[i, 0] + across * -t[i, 1])
+        out[i, 1] = SFM_SOCIAL * (along * t[i, 1] + across * t[i, 0])
+    return out
 
 
 def social_force(pos_a, vel_a, pos_b, vel_b) -> np.ndarray:
     """The social force (m/s^2, per unit mass) that agents at ``pos_a`` moving at ``vel_a`` exert on agents at
-    ``pos_b`` moving at ``vel_b`` (rows paired): Moussaid et al., "Experimental study of the behavioural mechanisms
-    underlying self-organization in human crowds", Proc. R. Soc. B 276, 2009, Eq. 2.3-2.5, in lightsfm's
-    implementation (``computeSocialForce``, include/sfm.hpp), which HuNavSim's evaluator copies: interaction vector
-    I = lambda (v_b - v_a) + e (e the unit vector from b to a), t = I / |I|, B = gamma |I|, theta the angle from t
-    to e, f = -A exp(-d / B) [exp(-(n' B theta)^2) t + sign(theta) exp(-(n B theta)^2) t_left], d the centre
-    distance. lightsfm's small bias epsilon B on theta is left out, as HuNavSim's evaluator leaves it out."""
-    diff = pos_a - pos_b
-    d = np.hypot(*diff.T)
-    e = diff / np.maximum(d, 1e-12)[:, None]
-    inter = SFM_LAMBDA * (vel_b - vel_a) + e
-    length = np.maximum(np.hypot(*inter.T), 1e-12)
-    t = inter / length[:, None]
-    b = SFM_GAMMA * length
-    theta = wrap_angle(np.arctan2(e[:, 1], e[:, 0]) - np.arctan2(t[:, 1], t[:, 0]))
-    along = -np.exp(-d / b - (SFM_N_PRIME * b * theta) ** 2)
-    across = -np.sign(theta) * np.exp(-d / b - (SFM_N * b * theta) ** 2)
-    left = np.column_stack([-t[:, 1], t[:, 0]])
-    return SFM_SOCIAL * (along[:, None] * t + across[:, None] * left)
+    ``pos_b`` moving at ``vel_b`` (rows paired, [M, 2] each): Moussaid et al., "Experimental study of the
+    behavioural mechanisms underlying self-organization in human crowds", Proc. R. Soc. B 276, 2009, Eq. 2.3-2.5, in
+    lightsfm's implementation (``computeSocialForce``, include/sfm.hpp), which HuNavSim's evaluator copies:
+    interaction vector I = lambda (v_b - v_a) + e (e the unit vector from b to a), t = I / |I|, B = gamma |I|, theta
+    the angle from t to e, f = -A exp(-d / B) [exp(-(n' B theta)^2) t + sign(theta) exp(-(n B theta)^2) t_left], d
+    the centre distance. lightsfm's small bias epsilon B on theta is left out, as HuNavSim's evaluator leaves it
+    out. The angles and exponentials are numpy's (one call each), the rest kernels."""
+    rows = [np.asarray(v, float).reshape(-1, 2) for v in (pos_a, vel_a, pos_b, vel_b)]
+    if len({len(v) for v in rows}) != 1:
+        raise ValueError(f"social_force: pos_a, vel_a, pos_b, vel_b must hold as many rows, got "
+                         f"{[len(v) for v in rows]}")
+    d, b, t, y, x = _force_geometry(*rows)
+    theta, exponent = _force_exponents(np.arctan2(y, x), d, b)
+    return _force(theta, np.exp(exponent), t)
 
 
-def _social_work(stamp, robot_xy, robot_v, robot_r, people: PersonRows, wall_dist) -> float:
+@kernel
+def _work_pairs(rows, frame, position, velocity, robot_xy, robot_v):
+    """The agent pairs of the social work: the people on the robot (rows 0..M-1), then the robot on them."""
+    m = len(rows)
+    pos_a, vel_a, pos_b, vel_b = np.empty((2 * m, 2)), np.empty((2 * m, 2)), np.empty((2 * m, 2)), np.empty((2 * m, 2))
+    for k in range(m):
+        i, f = rows[k], frame[rows[k]]
+        for j in range(2):
+            pos_a[k, j], vel_a[k, j] = position[i, j], velocity[i, j]
+            pos_b[k, j], vel_b[k, j] = robot_xy[f, j], robot_v[f, j]
+            pos_a[m + k, j], vel_a[m + k, j] = robot_xy[f, j], robot_v[f, j]
+            pos_b[m + k, j], vel_b[m + k, j] = position[i, j], velocity[i, j]
+    return pos_a, vel_a, pos_b, vel_b
+
+
+@kernel
+def _integrated_work(stamp, force, rows, frame, obstacle):
+    """Per frame |the summed force on the robot| + the obstacle force + the sum of |the forces of the robot|, over
+    the stamps by the trapezoid rule (numpy's: a pairwise sum of the intervals' d (w1 + w0) / 2)."""
+    n, m = len(stamp), len(rows)
+    fx, fy, by = np.zeros(n), np.zeros(n), np.zeros(n)
+    for k in range(m):
+        f = frame[rows[k]]
+        fx[f] += force[k, 0]
+        fy[f] += force[k, 1]
+        by[f] += math.hypot(force[m + k, 0], force[m + k, 1])
+    work = np.empty(n)
+    for f in range(n):
+        work[f] = math.hypot(fx[f], fy[f]) + obstacle[f] + by[f]
+    area = np.empty(n - 1)
+    for f in range(n - 1):
+        area[f] = (stamp[f + 1] - stamp[f]) * (work[f + 1] + work[f]) / 2.0
+    return pairwise(area, 0, n - 1)
+
+
+def _social_work(stamp, robot_xy, robot_v, robot_r, people: PersonRows, rows, wall_dist) -> float:
     """HuNavSim's social work (``SFM.computeSocialWork``) integrated over time: per frame, |the summed social force
-    of the people on the robot| + |the obstacle force on the robot| + the sum over people of |the social force of the
-    robot on them|; HuNavSim adds these per frame, we integrate over the stamps (trapezoid rule) so the figure does
-    not depend on the logging rate: m/s^2 * s = m/s per unit mass. The obstacle force is lightsfm's with a map (its
-    nearest obstacle point: here the nearest wall point): 10 exp(-(distance - robot radius) / 0.2 m)."""
-    n = len(stamp)
-    rp, rv = robot_xy[people.frame], robot_v[people.frame]
-    on_robot = social_force(people.position, people.velocity, rp, rv)
-    by_robot = np.hypot(*social_force(rp, rv, people.position, people.velocity).T)
-    fx = np.bincount(people.frame, on_robot[:, 0], n)
-    fy = np.bincount(people.frame, on_robot[:, 1], n)
+    of the people (``rows`` of ``people``) on the robot| + |the obstacle force on the robot| + the sum over people of
+    |the social force of the robot on them|; HuNavSim adds these per frame, we integrate over the stamps (trapezoid
+    rule) so the figure does not depend on the logging rate: m/s^2 * s = m/s per unit mass. The obstacle force is
+    lightsfm's with a map (its nearest obstacle point: here the nearest wall point): 10 exp(-(distance - robot
+    radius) / 0.2 m)."""
+    if len(stamp) < 2:
+        return 0.0
+    force = social_force(*_work_pairs(rows, people.frame, people.position, people.velocity, robot_xy, robot_v))
     obstacle = SFM_OBSTACLE * np.exp(-(wall_dist - robot_r) / SFM_OBSTACLE_SIGMA)
-    work = np.hypot(fx, fy) + obstacle + np.bincount(people.frame, by_robot, n)
-    return float(np.trapezoid(work, stamp)) if n > 1 else 0.0
+    return float(_integrated_work(stamp, force, rows, people.frame, obstacle))
 
 
-def _crossings(robot_xy, robot_r, people: PersonRows) -> tuple[int, int]:
-    """(in front, behind): the times the robot crossed a walking person's path within CROSSING_RANGE of them.
+@kernel
+def _by_person(rows, frame, ids):
+    """``rows`` ordered by person id, then frame (``np.lexsort((frame, id))``'s order: both sorts stable). Rows
+    logged frame by frame skip the sort by frame, and a few ids sort by counting."""
+    m = len(rows)
+    by_frame = np.arange(m)
+    for k in range(1, m):
+        if frame[rows[k]] < frame[rows[k - 1]]:
+            by_frame = np.argsort(frame[rows], kind="mergesort")
+            break
+    if m == 0:
+        return rows
+    person = ids[rows][by_frame]
+    lo, hi = person.min(), person.max()
+    if hi - lo > 4 * m:
+        return rows[by_frame[np.argsort(person, kind="mergesort")]]
+    _, order = by_label(person - lo, hi - lo + 1)
+    return rows[by_frame[order]]
+
+
+@kernel
+def _crossings(rows, frame, ids, position, velocity, radius, robot_xy, robot_r):
+    """(in front, behind): the times the robot crossed a walking person's path within CROSSING_RANGE of them, over
+    person ``rows``.
 
     In the person's frame (x along their velocity, y to their left), the robot is on a side of their path while its
     disc is clear of the strip their disc sweeps: |y| >= robot radius + person radius. A crossing is a change of
-    side between consecutive frames of one walking stretch (the person faster than WALKING_SPEED in every frame;
+    side between consecutive frames of one walking stretch (the person faster than WALKING_SPEED in each; any
     frames inside the strip between them), so a robot that wanders inside the strip, following straight behind
     someone say, or walks beside them, crosses nothing however much it jitters. Where the robot crossed the path
     (y = 0) is interpolated between the last frame on the old side and the first on the new: in front if x > 0
-    there. Sides are relative: a person stepping across a still robot crosses it too; one walking past it does not.
-    A side change while the person's heading turned by more than 90 degrees is the person turning, not the robot
+    there. Sides are relative: a person stepping across a still robot crosses it too; one walking past does not.
+    A side change while the person's heading turned by more than 90 degrees is the person turning, not a
     crossing, and does not count."""
-    if not len(people.frame):
-        return 0, 0
-    order = np.lexsort((people.frame, people.id))
-    p = people.select(order)
-    speed = np.hypot(*p.velocity.T)
-    walking = speed > WALKING_SPEED
-    u = p.velocity / np.maximum(speed, 1e-12)[:, None]
-    rel = robot_xy[p.frame] - p.position
-    x = (rel * u).sum(-1)
-    y = u[:, 0] * rel[:, 1] - u[:, 1] * rel[:, 0]
-    clear = robot_r + p.radius
-    side = np.where(walking & (y >= clear), 1, np.where(walking & (y <= -clear), -1, 0))
-    rows = np.arange(len(side))
-    goes_on = np.r_[False, (p.id[1:] == p.id[:-1]) & (p.frame[1:] == p.frame[:-1] + 1) & walking[1:] & walking[:-1]]
-    start = np.maximum.accumulate(np.where(goes_on, 0, rows))  # first row of each row's walking stretch
-    last_side = np.maximum.accumulate(np.where(side != 0, rows, -1))  # latest row on a side, up to each row
-    prev = np.r_[-1, last_side[:-1]]
-    event = (side != 0) & goes_on & (prev >= start)
-    event[event] = side[prev[event]] == -side[event]
-    b = np.flatnonzero(event)
-    a = prev[b]
-    xc = x[a] + (x[b] - x[a]) * y[a] / (y[a] - y[b])
-    counted = (np.abs(xc) <= CROSSING_RANGE) & ((u[a] * u[b]).sum(-1) > 0)
-    front = int(np.count_nonzero(counted & (xc > 0)))
-    return front, int(np.count_nonzero(counted)) - front
+    order = _by_person(rows, frame, ids)
+    m = len(order)
+    x, y, u = np.empty(m), np.empty(m), np.empty((m, 2))
+    side, walking = np.zeros(m, np.int64), np.zeros(m, np.bool_)
+    front = behind = 0
+    start, last_side = 0, -1  # the first row of the current walking stretch; the latest row on a side
+    for k in range(m):
+        i = order[k]
+        f = frame[i]
+        speed = math.hypot(velocity[i, 0], velocity[i, 1])
+        walking[k] = speed > WALKING_SPEED
+        u[k, 0], u[k, 1] = velocity[i, 0] / max(speed, 1e-12), velocity[i, 1] / max(speed, 1e-12)
+        rx, ry = robot_xy[f, 0] - position[i, 0], robot_xy[f, 1] - position[i, 1]
+        x[k] = rx * u[k, 0] + ry * u[k, 1]
+        y[k] = u[k, 0] * ry - u[k, 1] * rx
+        clear = robot_r + radius[i]
+        side[k] = 1 if walking[k] and y[k] >= clear else -1 if walking[k] and y[k] <= -clear else 0
+        goes_on = k > 0 and ids[i] == ids[order[k - 1]] and f == frame[order[k - 1]] + 1 and walking[k] \
+            and walking[k - 1]
+        if not goes_on:
+            start = k
+        a = last_side
+        if side[k] != 0:
+            last_side = k
+            if goes_on and a >= start and side[a] == -side[k]:
+                xc = x[a] + (x[k] - x[a]) * y[a] / (y[a] - y[k])
+                if abs(xc) <= CROSSING_RANGE and u[a, 0] * u[k, 0] + u[a, 1] * u[k, 1] > 0:
+                    if xc > 0:
+                        front += 1
+                    else:
+                        behind += 1
+    return front, behind
 
 
 def _following(ep: NavEpisode, n: int) -> dict:
@@ -373,37 +577,35 @@ def navigation_metrics(ep: NavEpisode) -> dict:
     """
     people, t_all = ep.persons, len(ep.stamp)
     rxy_all = ep.robot_pose[:, :2]
-    gap_all = np.hypot(*(people.position - rxy_all[people.frame]).T) - people.radius - ep.robot_radius
+    gap_all, gap_min_all = _person_gaps(people.frame, people.position, people.radius, rxy_all, ep.robot_radius, t_all)
     wall_dist_all = _wall_distance(rxy_all, ep.walls)
-    end, out = _outcome(ep, _frame_min(gap_all, people.frame, t_all), wall_dist_all - ep.robot_radius)
+    end, out = _outcome(ep, gap_min_all, wall_dist_all - ep.robot_radius)
     n = end + 1
     stamp, pose, rxy = ep.stamp[:n], ep.robot_pose[:n], rxy_all[:n]
 
-    length = float(np.hypot(*np.diff(rxy, axis=0).T).sum())
+    path = _path(stamp, pose, n)
+    length = float(path[0])
     out["path_length"] = length
     irregularity = float("nan")
     if ep.task == "goal" and length > 0:
-        turned = float(np.abs(wrap_angle(np.diff(pose[:, 2]))).sum())
         bearing = np.arctan2(ep.goal[1] - rxy[0, 1], ep.goal[0] - rxy[0, 0])
-        irregularity = max(turned - abs(float(wrap_angle(bearing - pose[0, 2]))), 0.0) / length
+        irregularity = max(float(path[1]) - abs(float(wrap_angle(bearing - pose[0, 2]))), 0.0) / length
     out["path_irregularity"] = irregularity
-    out.update(_smoothness(stamp, pose))
+    out.update(zip(SMOOTHNESS_KEYS, path[2:].tolist()))
 
     keep = people.frame <= end
     if ep.task == "follow":
         keep &= people.id != ep.target_id
-    others, gap = people.select(keep), gap_all[keep]
-    gap_min = _frame_min(gap, others.frame, n)
-    robot_v = np.gradient(rxy, stamp, axis=0) if n > 1 else np.zeros((1, 2))
-    ttc = _time_to_collision(others.position - rxy[others.frame], others.velocity - robot_v[others.frame],
-                             others.radius + ep.robot_radius)
-    front, behind = _crossings(rxy, ep.robot_radius, others)
-    out.update({"min_distance": float(gap.min()) if gap.size else float("inf"),
-                "discomfort_frequency": float((gap_min < DISCOMFORT_GAP).mean()),
-                "intimate_share": float((gap_min < INTIMATE_GAP).mean()),
-                "personal_share": float(((gap_min >= INTIMATE_GAP) & (gap_min < PERSONAL_GAP)).mean()),
-                "min_time_to_collision": float(ttc.min()) if ttc.size else float("inf"),
-                "social_work": _social_work(stamp, rxy, robot_v, ep.robot_radius, others, wall_dist_all[:n]),
+    rows = np.flatnonzero(keep)
+    robot_v = _gradient(rxy, stamp, n) if n > 1 else np.zeros((1, 2))
+    closest, soonest, discomfort, intimate, personal = _social(rows, people.frame, people.position, people.velocity,
+                                                               people.radius, gap_all, rxy, robot_v,
+                                                               ep.robot_radius, n)
+    front, behind = _crossings(rows, people.frame, people.id, people.position, people.velocity, people.radius, rxy,
+                               ep.robot_radius)
+    out.update({"min_distance": closest, "discomfort_frequency": discomfort / n, "intimate_share": intimate / n,
+                "personal_share": personal / n, "min_time_to_collision": soonest,
+                "social_work": _social_work(stamp, rxy, robot_v, ep.robot_radius, people, rows, wall_dist_all[:n]),
                 "crossings_front": front, "crossings_behind": behind})
     out.update(_following(ep, n) if ep.task == "follow" else dict.fromkeys(FOLLOWING_KEYS, float("nan")))
     return out

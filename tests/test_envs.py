@@ -314,3 +314,55 @@ def test_vector_reset_takes_numpy_seeds_and_refuses_partial_option_changes():
     assert np.array_equal(a["persons"], b["persons"])
     with pytest.raises(ValueError, match="expected no reset_mask"):
         vec.reset(options={"people": 4, "reset_mask": np.array([True, False])})
+
+
+def test_random_force_drawn_in_blocks_is_the_per_step_draw():
+    """Each world's noise generator draws NOISE_BLOCK steps at once: the numbers a draw a step gives, in order."""
+    from crowdsim.envs.core import NOISE_BLOCK
+
+    episodes = Episodes(2, Config(people=3))
+    for k in range(2):
+        episodes.reset(k, np.random.default_rng(k))
+    twins = [g.spawn(4)[1] for g in (np.random.default_rng(0), np.random.default_rng(1))]  # reset's noise_rng
+    scale = episodes.worlds.crowd_p.random_force
+    for _ in range(NOISE_BLOCK + 3):
+        draws = episodes._noise_draws()
+        for k in range(2):
+            assert np.array_equal(draws[k], twins[k].normal(0.0, scale, (episodes.ticks, 2, 3)))
+
+
+def test_episode_log_grows_past_its_room_when_stepped_on():
+    """A disabled-autoreset episode stepped on past its end keeps logging (the log doubles its room) and its
+    metrics cover every entry."""
+    vec = gym.make_vec("crowdsim/Navigate-v0", num_envs=1, vectorization_mode="vector_entry_point", people=2,
+                       time_limit=0.4, autoreset_mode=AutoresetMode.DISABLED)
+    vec.reset(seed=0)
+    episodes = vec.unwrapped.episodes
+    room = episodes.log["stamp"].shape[1]
+    for _ in range(room + 1):
+        vec.step(np.zeros((1, 2), np.float32))
+    assert episodes.logged[0] == room + 2 and episodes.log["stamp"].shape[1] == 2 * room
+    stamps = episodes.log["stamp"][0, :room + 2]
+    assert np.allclose(np.diff(stamps), 0.2) and stamps[0] == 0.0
+    assert isinstance(episodes.episode_metrics(0)["path_length"], float)
+
+
+def test_vector_info_merges_key_by_key():
+    from crowdsim.envs.navigate import _merge
+
+    out = _merge([{"a": 1.5, "m": {"x": 1}}, {}, {"a": 2.0, "b": True}])
+    assert list(out) == ["a", "_a", "m", "_m", "b", "_b"]
+    assert out["a"].dtype == float and out["a"].tolist() == [1.5, 0.0, 2.0] and out["_a"].tolist() == [1, 0, 1]
+    assert out["m"].tolist() == [{"x": 1}, None, None] and out["_m"].tolist() == [True, False, False]
+    assert out["b"].dtype == bool and out["b"].tolist() == [False, False, True]
+    assert _merge([{}, {}]) == {}
+
+
+def test_unscored_episodes_get_no_episode_metrics():
+    """What a vector environment's restarting episodes report is dropped: their episode metrics are not computed."""
+    episodes = Episodes(2, Config(people=2, time_limit=0.2))
+    for k in range(2):
+        episodes.reset(k, np.random.default_rng(k))
+    _, _, truncated, infos = episodes.step(np.zeros((2, 2)), unscored=np.array([True, False]))
+    assert truncated.all()
+    assert "episode_metrics" not in infos[0] and "episode_metrics" in infos[1]

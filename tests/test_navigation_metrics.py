@@ -269,3 +269,128 @@ def test_bad_run_directory_gets_one_clear_error(tmp_path, capsys, break_it, expe
     assert expect in str(e.value)
     assert main(["evaluate-nav", str(tmp_path / "run")]) == 2
     assert expect in one_error_line(capsys.readouterr().err)
+
+
+# ---- the kernels, on hand-worked values ----
+
+def test_wall_distance_to_segments_and_a_zero_length_one():
+    from evaluation.navigation import _wall_distance
+
+    # the segment (0, 0)-(2, 0) and the point wall (5, 5): (1, 1) is 1 m above the segment's middle, (3, 1) sqrt 2
+    # from its end (2, 0), (-1, 0) 1 m before its start, (5, 4) 1 m below the point (and 5 m from (2, 0))
+    xy = np.array([[1.0, 1.0], [3.0, 1.0], [-1.0, 0.0], [5.0, 4.0]])
+    d = _wall_distance(xy, np.array([[[0.0, 0.0], [2.0, 0.0]], [[5.0, 5.0], [5.0, 5.0]]]))
+    assert d.tolist() == pytest.approx([1.0, math.sqrt(2), 1.0, 1.0])
+    assert _wall_distance(xy, np.zeros((0, 2, 2))).tolist() == [math.inf] * 4
+
+
+def test_person_gaps_and_the_least_per_frame():
+    from evaluation.navigation import _person_gaps
+
+    # robot (r 0.3) at (0, 0) in frame 0 and (1, 0) in frame 2; rows: frame 0 person at (2, 0) r 0.2 (gap 1.5),
+    # frame 0 at (0, 1) r 0.2 (gap 0.5), frame 2 at (1, 3) r 0.5 (gap 2.2); frame 1 has nobody
+    frame = np.array([0, 0, 2])
+    gap, least = _person_gaps(frame, np.array([[2.0, 0.0], [0.0, 1.0], [1.0, 3.0]]), np.array([0.2, 0.2, 0.5]),
+                              np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0]]), 0.3, 3)
+    assert gap.tolist() == pytest.approx([1.5, 0.5, 2.2])
+    assert least.tolist() == pytest.approx([0.5, math.inf, 2.2])
+
+
+def test_end_frames_median_interval_collision_and_goal():
+    from evaluation.navigation import _end_frames
+
+    # stamps 0, 1, 2, 4, 7 (intervals 1, 1, 2, 3: median (1 + 2) / 2 = 1.5); time limit 4 s: frames 0-3 within;
+    # a person gap below 0 at frame 2, a wall gap below 0 at frame 1 (the first collision), the goal (3, 0)
+    # within 0.5 m of frame 3's (3.2, 0) and of frame 4's, which is past the limit
+    stamp = np.array([0.0, 1.0, 2.0, 4.0, 7.0])
+    xy = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.2, 0.0], [3.0, 0.0]])
+    person, wall = np.array([1.0, 1.0, -0.1, 1.0, 1.0]), np.array([1.0, -0.2, 1.0, 1.0, 1.0])
+    assert _end_frames(stamp, xy, np.array([3.0, 0.0]), 0.5, 4.0, person, wall) == (3, 1.5, 1, 3)
+    # no goal, no collision; an odd count of intervals (1, 1, 2: median 1)
+    ok = np.ones(4)
+    assert _end_frames(stamp[:4], xy[:4], np.zeros(0), 0.5, 10.0, ok, ok) == (3, 1.0, -1, -1)
+    assert _end_frames(stamp[:1], xy[:1], np.zeros(0), 0.5, 10.0, ok[:1], ok[:1]) == (0, 0.0, -1, -1)
+
+
+def test_path_length_turning_and_smoothness_kernel():
+    from evaluation.navigation import SMOOTHNESS_KEYS, _path
+
+    # dt 1 s; (0, 0) -> (3, 4) -> (3, 4) -> (3, 5): steps 5, 0, 1 m; yaw 3.0, -3.0 (a turn of 2 pi - 6 through pi),
+    # -3.0, -2.5: turned 0.2832 + 0 + 0.5. Speeds 5, 0, 1 at t 0.5, 1.5, 2.5: accelerations -5, 1 (mean 3, peak 5)
+    # at t 1, 2: jerk 6. Yaw rates 0.2832, 0, 0.5: accelerations -0.2832, 0.5, jerk 0.7832.
+    pose = np.array([[0.0, 0.0, 3.0], [3.0, 4.0, -3.0], [3.0, 4.0, -3.0], [3.0, 5.0, -2.5]])
+    out = _path(np.arange(4.0), pose, 4)
+    w = 2 * math.pi - 6
+    assert out[:2].tolist() == pytest.approx([6.0, w + 0.5])
+    figures = dict(zip(SMOOTHNESS_KEYS, out[2:]))
+    assert figures == pytest.approx({"mean_linear_acceleration": 3.0, "peak_linear_acceleration": 5.0,
+                                     "mean_linear_jerk": 6.0, "peak_linear_jerk": 6.0,
+                                     "mean_angular_acceleration": (w + 0.5) / 2, "peak_angular_acceleration": 0.5,
+                                     "mean_angular_jerk": 0.5 + w, "peak_angular_jerk": 0.5 + w})
+    one = _path(np.zeros(1), pose[:1], 1)  # one frame: no path, no rates
+    assert one[:2].tolist() == [0.0, 0.0] and np.isnan(one[2:]).all()
+
+
+def test_gradient_kernel_uniform_and_uneven_stamps():
+    from evaluation.navigation import _gradient
+
+    # x = t^2 at t = 0, 1, 2: central difference (4 - 0) / 2 = 2 inside, one-sided 1 and 3 at the ends
+    xy = np.column_stack([np.array([0.0, 1.0, 4.0]), np.zeros(3)])
+    assert _gradient(xy, np.array([0.0, 1.0, 2.0]), 3)[:, 0].tolist() == [1.0, 2.0, 3.0]
+    # t = 0, 1, 3, x = t^2 (0, 1, 9): numpy's second-order formula at t = 1 with h1 = 1, h2 = 2 gives the exact
+    # derivative 2 of a parabola; ends (1 - 0) / 1 = 1 and (9 - 1) / 2 = 4
+    xy = np.column_stack([np.zeros(3), np.array([0.0, 1.0, 9.0])])
+    assert _gradient(xy, np.array([0.0, 1.0, 3.0]), 3)[:, 1].tolist() == pytest.approx([1.0, 2.0, 4.0])
+
+
+def test_time_to_collision_kernel():
+    from evaluation.navigation import _time_to_collision
+
+    # 3 m apart closing at 2 m/s, radii 1: (3 - 1) / 2 = 1 s; moving apart: never; overlapping: 0; standing: never
+    assert _time_to_collision(3.0, 0.0, -2.0, 0.0, 1.0) == pytest.approx(1.0)
+    assert _time_to_collision(3.0, 0.0, 2.0, 0.0, 1.0) == math.inf
+    assert _time_to_collision(0.5, 0.0, 2.0, 0.0, 1.0) == 0.0
+    assert _time_to_collision(3.0, 4.0, 0.0, 0.0, 1.0) == math.inf
+    # 4 m ahead, 0.6 m off the line, closing at 1 m/s, radii 1: touch when the along-line offset is 0.8: 3.2 s
+    assert _time_to_collision(4.0, 0.6, -1.0, 0.0, 1.0) == pytest.approx(3.2)
+
+
+def test_social_kernel_counts_frames_by_their_least_gap():
+    from evaluation.navigation import _social
+
+    # four frames, the robot still at the origin; rows (frame, gap): (0, 0.1), (0, 0.3), (1, 0.3), (2, 1.0),
+    # (3, 2.0) and a row of frame 1 left out of ``rows``. Least per frame 0.1, 0.3, 1.0, 2.0: below 0.2 once,
+    # below 0.45 twice, in [0.45, 1.2) once
+    frame = np.array([0, 0, 1, 1, 2, 3])
+    gap = np.array([0.1, 0.3, -5.0, 0.3, 1.0, 2.0])
+    pos, zero = np.column_stack([np.arange(2.0, 8.0), np.zeros(6)]), np.zeros((6, 2))
+    out = _social(np.array([0, 1, 3, 4, 5]), frame, pos, zero, np.full(6, 0.2), gap, np.zeros((4, 2)),
+                  np.zeros((4, 2)), 0.3, 4)
+    assert out == (0.1, math.inf, 1, 2, 1)
+
+
+def test_person_order_is_by_id_then_frame_whatever_the_rows_order():
+    from evaluation.navigation import _by_person
+
+    frame, ids = np.array([2, 0, 1, 0, 1, 2]), np.array([5, 5, 7, 7, 5, 7])
+    # person 5 at frames 0, 1, 2 are rows 1, 4, 0; person 7 rows 3, 2, 5
+    assert _by_person(np.arange(6), frame, ids).tolist() == [1, 4, 0, 3, 2, 5]
+    assert _by_person(np.arange(6), frame, ids * 1000).tolist() == [1, 4, 0, 3, 2, 5]  # ids too far apart to count
+    assert _by_person(np.array([5, 0]), frame, ids).tolist() == [0, 5]
+    assert _by_person(np.zeros(0, np.int64), frame, ids).tolist() == []
+
+
+def test_integrated_work_is_the_trapezoid_of_the_frames_work():
+    from evaluation.navigation import _integrated_work
+
+    # stamps 0, 1, 3; one person row in frames 0 and 2 (forces on the robot (3, 4) and (0, 1), the robot's on them
+    # of size 1 and 2), obstacle forces 1, 2, 0: work 5 + 1 + 1 = 7, 2, 1 + 0 + 2 = 3; area 1 (7 + 2) / 2 +
+    # 2 (2 + 3) / 2 = 9.5
+    force = np.array([[3.0, 4.0], [0.0, 1.0], [1.0, 0.0], [0.0, 2.0]])
+    assert _integrated_work(np.array([0.0, 1.0, 3.0]), force, np.array([0, 1]), np.array([0, 2]),
+                            np.array([1.0, 2.0, 0.0])) == pytest.approx(9.5)
+
+
+def test_social_force_rows_must_pair():
+    with pytest.raises(ValueError, match="as many rows"):
+        social_force(np.zeros((2, 2)), np.zeros((2, 2)), np.zeros((1, 2)), np.zeros((2, 2)))

@@ -32,6 +32,7 @@ from .world import Worlds
 TASKS = ("navigate", "follow")
 MODES = ("truth", "laser", "tracks")
 GOAL_RADIUS = 0.3  # m: the goal is reached when the robot's centre is this near (CrowdNav: within the robot radius)
+NOISE_BLOCK = 16  # steps of random force drawn at once per world (one generator call, not one a step)
 
 # The robot, its laser and its pipeline: the scenario defaults (the SPENCER-like platform, a SICK LMS500 at 0.70 m,
 # seed 000's segment detector and NNT), with one laser seeing all round, as the airport's two back to back lasers do
@@ -104,13 +105,17 @@ class Episodes:
         c = self.config
         self.worlds = Worlds(self.n, c.people, c.scenario, self.scenario, c.robot_visible)
         self.noise_rng: list[np.random.Generator | None] = [None] * self.n
+        w = self.worlds
+        self.noise = np.zeros((self.n, NOISE_BLOCK, self.ticks, 2, w.N))  # per world its next steps' draws
+        self.noise_next = np.full(self.n, NOISE_BLOCK)  # per world the block's next unused step
+        self.everyone = np.arange(self.n)
         self.scenes, self.lasers, self.software = [], [], []
         self.tracks = [None] * self.n
         self.scans = [None] * self.n
         self.start = np.zeros((self.n, 3))
         self.elapsed = np.zeros(self.n)
         self.distance = np.zeros(self.n)
-        self.log: list[list] = [[] for _ in range(self.n)]
+        self._log_arrays(int(np.ceil(c.time_limit / c.control_period)) + 3)
         self.tags: list[TagSensor | None] = [None] * self.n
         self.tag_readings = [None] * self.n
 
@@ -131,6 +136,7 @@ class Episodes:
         self.generators[k] = generator
         layout_rng, noise_rng, laser_rng, tag_rng = generator.spawn(4)
         self.noise_rng[k] = noise_rng
+        self.noise_next[k] = NOISE_BLOCK
         self.worlds.reset(k, layout_rng)
         if self.config.task == "follow":
             self.tags[k] = TagSensor(rng=tag_rng)
@@ -140,8 +146,8 @@ class Episodes:
         self.distance[k] = self._goal_distance(k)
         if self.sensing:
             self._reset_sensing(k, laser_rng)
-        self.log[k] = []
-        self._log(k, None)
+        self.logged[k] = 0
+        self._log(np.array([k]), {})
 
     def _reset_sensing(self, k: int, rng: np.random.Generator) -> None:
         laser_p = self.scenario.sensors.lasers[0]
@@ -185,20 +191,23 @@ class Episodes:
             software.receive(scan, laser.pose_in(self.odom_pose(k)))
             self.tracks[k] = software.cycle(stamp).tracks
 
-    def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict]]:
+    def step(self, actions: np.ndarray, unscored: np.ndarray | None = None
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict]]:
         """One control period for every episode: actions [E, 2] in [-1, 1] scaled to the robot's limits. Returns
-        rewards, terminated, truncated [E] and one info per episode."""
+        rewards, terminated, truncated [E] and one info per episode. Episodes ``unscored`` [E] (bool; a vector
+        environment's that start over after this step, their info dropped) get no episode metrics."""
         w = self.worlds
         command = np.minimum(np.maximum(np.asarray(actions, float).reshape(self.n, 2), -1.0), 1.0) * self.top_speed
-        draws = np.stack([g.normal(0.0, w.crowd_p.random_force, (self.ticks, 2, w.N)) for g in self.noise_rng], 2)
-        noise = draws[:, 0] + 1j * draws[:, 1]  # [ticks, E, N]
+        draws = self._noise_draws()  # [E, ticks, 2, N]
+        noise = (draws[:, :, 0] + 1j * draws[:, :, 1]).transpose(1, 0, 2)  # [ticks, E, N]
         gaps, at_collision = w.tick(command, noise)  # at_collision: episode -> its state at its first collision
         gap = gaps.min(axis=0)
         self.elapsed += self.ticks * w.dt
-        for k in range(self.n):
-            if self.sensing:
+        if self.sensing:
+            for k in range(self.n):
                 self._sense(k)
-            if self.config.task == "follow":
+        if self.config.task == "follow":
+            for k in range(self.n):
                 self._read_tag(k)
         before = self.distance.copy()
         self.distance = np.hypot(*(w.goal - w.robot_pose[:, :2]).T)
@@ -207,28 +216,58 @@ class Episodes:
         terminated = collided | reached
         truncated = ~terminated & (self.elapsed >= self.config.time_limit - 1e-9)
         rewards, terms = self.reward(self, before, gap, reached, collided)
-        infos = []
-        for k in range(self.n):
-            self._log(k, at_collision.get(k))
-            info = {"reward_terms": {name: float(v[k]) for name, v in terms.items()}, "collision": bool(collided[k]),
-                    "success": bool(reached[k]), "time": float(self.elapsed[k])}
-            if terminated[k] or truncated[k]:
-                info["episode_metrics"] = self.episode_metrics(k)
-            infos.append(info)
+        self._log(self.everyone, at_collision)
+        names = list(terms)
+        each = zip(*(terms[name].astype(float, copy=False).tolist() for name in names))  # per episode its terms
+        infos = [{"reward_terms": dict(zip(names, values)), "collision": c, "success": s, "time": t}
+                 for values, c, s, t in zip(each, collided.tolist(), reached.tolist(), self.elapsed.tolist())]
+        for k in np.flatnonzero((terminated | truncated) & (True if unscored is None else ~unscored)):
+            infos[k]["episode_metrics"] = self.episode_metrics(k)
         return rewards, terminated, truncated, infos
 
-    def _state(self, k: int) -> tuple:
+    def _noise_draws(self) -> np.ndarray:
+        """Every world's random force for this step [E, ticks, 2, N]: the next step of its block, a world whose block
+        is used up drawing the next NOISE_BLOCK steps at once (the numbers one call a step would draw, in order)."""
         w = self.worlds
-        return float(w.t[k]), w.robot_pose[k].copy(), w.z[k].copy(), w.v[k].copy()
+        for k in np.flatnonzero(self.noise_next == NOISE_BLOCK):
+            self.noise[k] = self.noise_rng[k].normal(0.0, w.crowd_p.random_force, self.noise.shape[1:])
+            self.noise_next[k] = 0
+        draws = self.noise[self.everyone, self.noise_next]
+        self.noise_next += 1
+        return draws
 
-    def _log(self, k: int, state: tuple | None) -> None:
-        """One entry per step: the state at its end, or at the tick of a collision within it; for following, the
+    def _log_arrays(self, frames: int) -> None:
+        """Empty logs with room for ``frames`` entries an episode (a step's end state and the follower's belief)."""
+        w, n = self.worlds, self.n
+        self.log = {"stamp": np.zeros((n, frames)), "pose": np.zeros((n, frames, 3)),
+                    "z": np.zeros((n, frames, w.N), complex), "v": np.zeros((n, frames, w.N), complex),
+                    "track": np.zeros((n, frames), np.int64), "visible": np.zeros((n, frames), bool)}
+        self.logged = np.zeros(n, np.int64)  # entries per episode
+        self._person_rows(frames)
+
+    def _person_rows(self, frames: int) -> None:
+        """The frame and id of each person row of ``frames`` entries (frame by frame, ids 1..N), sliced per episode."""
+        N = self.worlds.N
+        self.log_frame, self.log_id = np.repeat(np.arange(frames), N), np.tile(np.arange(1, N + 1), frames)
+
+    def _log(self, worlds: np.ndarray, at_collision: dict) -> None:
+        """One entry per step for each of ``worlds``: the state at its end, or at the tick of a collision within it
+        (``at_collision``: world -> time, robot pose, persons' positions and velocities); for following, the
         target's track (the pipeline's track nearest the target, within the evaluation's threshold; the target's
         own id when the truth is observed) and whether the laser saw the target."""
-        entry = state or self._state(k)
+        log, w, row = self.log, self.worlds, self.logged[worlds]
+        if row.max() >= log["stamp"].shape[1]:  # an episode stepped on past its end: room for twice as many
+            self.log = log = {name: np.concatenate([a, np.zeros_like(a)], axis=1) for name, a in log.items()}
+            self._person_rows(log["stamp"].shape[1])
+        log["stamp"][worlds, row], log["pose"][worlds, row] = w.t[worlds], w.robot_pose[worlds]
+        log["z"][worlds, row], log["v"][worlds, row] = w.z[worlds], w.v[worlds]
+        for k, (stamp, pose, z, v) in at_collision.items():
+            r = self.logged[k]
+            log["stamp"][k, r], log["pose"][k, r], log["z"][k, r], log["v"][k, r] = stamp, pose, z, v
         if self.config.task == "follow":
-            entry += self._target_seen(k)
-        self.log[k].append(entry)
+            for k, r in zip(worlds, row):
+                log["track"][k, r], log["visible"][k, r] = self._target_seen(k)
+        self.logged[worlds] += 1
 
     def _target_seen(self, k: int) -> tuple[int, bool]:
         if not self.sensing:
@@ -246,16 +285,15 @@ class Episodes:
 
     def episode_metrics(self, k: int) -> dict:
         """The navigation metrics of episode k's log (``evaluation.navigation``)."""
-        log, w = self.log[k], self.worlds
-        T, N = len(log), w.N
-        persons = PersonRows(np.repeat(np.arange(T), N), np.tile(np.arange(1, N + 1), T),
-                             np.concatenate([e[2] for e in log]).view(float).reshape(-1, 2),
-                             np.concatenate([e[3] for e in log]).view(float).reshape(-1, 2), np.tile(w.radius[k], T))
-        common = dict(stamp=np.array([e[0] for e in log]), robot_pose=np.array([e[1] for e in log]),
-                      robot_radius=w.robot_radius, persons=persons, walls=w.walls, time_limit=self.config.time_limit)
+        log, w, T = self.log, self.worlds, self.logged[k]
+        M = T * w.N
+        persons = PersonRows(self.log_frame[:M], self.log_id[:M], log["z"][k, :T].view(float),
+                             log["v"][k, :T].view(float), np.tile(w.radius[k], T))
+        common = dict(stamp=log["stamp"][k, :T], robot_pose=log["pose"][k, :T], robot_radius=w.robot_radius,
+                      persons=persons, walls=w.walls, time_limit=self.config.time_limit)
         if self.config.task == "follow":
-            episode = NavEpisode(task="follow", target_id=1, band=BAND, target_track=np.array([e[4] for e in log]),
-                                 target_visible=np.array([e[5] for e in log]), **common)
+            episode = NavEpisode(task="follow", target_id=1, band=BAND, target_track=log["track"][k, :T],
+                                 target_visible=log["visible"][k, :T], **common)
         else:
             episode = NavEpisode(task="goal", goal=w.goal[k].copy(), goal_radius=GOAL_RADIUS, **common)
         return navigation_metrics(episode)

@@ -14,6 +14,7 @@ the last step's info holds ``episode_metrics``.
 
 from __future__ import annotations
 
+import itertools
 import numbers
 
 import gymnasium as gym
@@ -126,7 +127,7 @@ class CrowdVectorEnv(VectorEnv):
     def step(self, actions):
         actions = np.asarray(actions, float).reshape(self.num_envs, 2)
         restart = self._needs_reset.copy()
-        rewards, terminated, truncated, infos = self.episodes.step(actions)
+        rewards, terminated, truncated, infos = self.episodes.step(actions, unscored=restart)
         if self.autoreset_mode == AutoresetMode.NEXT_STEP and restart.any():
             # the episodes that ended last step start over now; their action is ignored
             for i in np.flatnonzero(restart):
@@ -165,16 +166,16 @@ def _masked(batch: dict[str, np.ndarray], mask: np.ndarray) -> np.ndarray:
 
 
 def _merge(infos: list[dict]) -> dict:
-    """Per-sub-environment infos as gymnasium's vector info: each key an array over sub-environments, with
-    ``_key`` marking where it is set."""
+    """Per-sub-environment infos as gymnasium's vector info: each key an array over sub-environments (of the type of
+    its first value; a missing one 0, False or None), with ``_key`` marking where it is set. Key by key, not
+    element by element: one array a key."""
     out: dict = {}
-    n = len(infos)
-    for i, info in enumerate(infos):
-        for key, value in info.items():
-            if key not in out:
-                kind = type(value)
-                out[key] = (np.zeros(n, dtype=kind) if kind in (bool, int, float) else np.full(n, None, dtype=object))
-                out["_" + key] = np.zeros(n, bool)
-            out[key][i] = value
-            out["_" + key][i] = True
+    for key in dict.fromkeys(itertools.chain.from_iterable(infos)):  # in order of first appearance
+        mask = [key in info for info in infos]
+        kind = type(infos[mask.index(True)][key])
+        if kind in (bool, int, float):
+            out[key] = np.array([info.get(key, False) for info in infos], dtype=kind)
+        else:
+            out[key] = np.fromiter((info.get(key) for info in infos), dtype=object, count=len(infos))
+        out["_" + key] = np.array(mask)
     return out

@@ -113,7 +113,7 @@ def _nearest(rows: np.ndarray, dist2: np.ndarray, k: int) -> tuple[np.ndarray, n
     E, n, f = rows.shape
     order = np.argsort(dist2, axis=1, kind="stable")[:, :k]
     out = np.zeros((E, k, f))
-    out[:, :min(n, k)] = np.take_along_axis(rows, order[..., None], axis=1)
+    out[:, :min(n, k)] = rows[np.arange(E)[:, None], order]
     mask = np.zeros((E, k))
     mask[:, :min(n, k)] = 1.0
     return out, mask
