@@ -8,6 +8,7 @@ complain about). Worker processes ignore both: the main process alone decides wh
 from __future__ import annotations
 
 import signal
+import sys
 from contextlib import contextmanager
 
 SIGNALS = (signal.SIGTERM, signal.SIGINT)
@@ -24,7 +25,29 @@ class Stopped(KeyboardInterrupt):
 def _raise_stopped(signum, frame) -> None:
     for s in SIGNALS:  # a second signal must not cut the clean-up short
         signal.signal(s, signal.SIG_IGN)
+    lock = getattr(sys.modules.get("numba.core.compiler_lock"), "global_compiler_lock", None)
+    if lock is not None and lock.is_locked():
+        _raise_when_unlocked(lock, signum)
+        return
     raise Stopped(signum)
+
+
+def _raise_when_unlocked(lock, signum: int) -> None:
+    """Raise ``Stopped`` once numba lets its compiler lock go. Why: a stop raised while numba compiles or loads a
+    kernel leaves that kernel's library half made, and the clean-up's next call of it fails ("no compiled object
+    yet") where the stop should have been reported; the compile or load is done within moments."""
+    from numba.core import event
+
+    class Unlocked(event.Listener):
+        def on_start(self, e) -> None:
+            pass
+
+        def on_end(self, e) -> None:
+            if not lock.is_locked():  # the outermost hold let go: the kernel is whole
+                event.unregister("numba:compiler_lock", self)
+                raise Stopped(signum)
+
+    event.register("numba:compiler_lock", Unlocked())
 
 
 @contextmanager

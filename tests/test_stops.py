@@ -38,3 +38,24 @@ def test_a_run_stopped_halfway_leaves_nothing(tmp_path, signum):
     name = signal.Signals(signum).name
     assert err.strip().splitlines() == [f"crowdsim: stopped by {name}; nothing was kept: run was not written"]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_stop_while_numba_compiles_comes_when_the_kernel_is_made():
+    """A signal while numba holds its compiler lock (compiling or loading a kernel) is raised only once the
+    outermost hold lets go, so no kernel is left half made; outside the lock it is raised at once."""
+    from numba.core.compiler_lock import global_compiler_lock
+
+    from crowdsim.stops import Stopped, _raise_stopped, stops_as_exceptions
+
+    reached_after_inner = False
+    with stops_as_exceptions():
+        with pytest.raises(Stopped) as stop:
+            with global_compiler_lock:
+                with global_compiler_lock:  # a kernel compiled while another compiles
+                    _raise_stopped(signal.SIGTERM, None)
+                reached_after_inner = True  # the inner release raised nothing
+            pytest.fail("the stop was not raised when the lock was let go")
+    assert reached_after_inner and stop.value.signum == signal.SIGTERM and not global_compiler_lock.is_locked()
+    with stops_as_exceptions():
+        with pytest.raises(Stopped):
+            _raise_stopped(signal.SIGINT, None)
