@@ -203,9 +203,9 @@ def _velocity(pos, vel, v0, e, speed, holding, radius, grouped, label, groups, r
     """Everyone's velocity after ``dt`` of every force term, walking in directions ``e`` at desired ``speed``: the
     relaxation towards the desired velocity (Helbing & Molnar 1995), the agent-agent force the crowd parameters
     choose (Moussaid 2009 summed in the ``order`` of ``forces.pair_order``; else Helbing & Molnar's ellipses over
-    the k-d tree's ``pairs``), the walls'
-    (but for those not ``repelled``), the groups' (Moussaid 2010, on the walking members ``grouped`` of ``groups``
-    groups numbered ``label``), the robot's disc (unless ``robot_x`` is NaN) and the random force ``noise``.
+    the k-d tree's ``pairs``), the walls' (but for those not ``repelled``), the groups' (Moussaid 2010, on the
+    walking members ``grouped`` of ``groups`` groups numbered ``label``), the robot's disc (unless ``robot_x`` is
+    NaN) and the random force ``noise``.
     Pressure from ahead stops a walker but does not make them walk backwards (in a jam the field of view makes the
     net force point backwards, and a whole crowd would walk backwards; contacts still push bodies physically);
     nobody exceeds ``max_speed_factor`` x their desired speed."""
