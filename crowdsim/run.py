@@ -28,6 +28,7 @@ from tqdm import tqdm
 
 from evaluation.columns import (DETECTIONS, FLAGS, FOLLOWING, GROUNDTRUTH, GROUPS, PERSONS, RELATIONS, ROBOT,
                                 TRACKS, VISIBILITY, WHOLE, Columns)
+from evaluation.decimals import format_rows, plain_decimals
 from evaluation.heap import release_memory
 from evaluation.navigation import navigation_metrics, read_nav_run
 from evaluation.navigation_report import json_safe
@@ -162,6 +163,7 @@ class CsvWriter:
         self.file.write(columns.header + "\n")
         self.fmt = fmt or csv_format(columns)
         self.names = {column: np.array(values, object) for column, values in (names or {}).items()}
+        self.decimals = None if self.names else plain_decimals(self.fmt)  # written by the kernel when all plain
         self.buffer = np.empty((BLOCK_ROWS, len(self.fmt)))
         self.rows = 0
 
@@ -176,13 +178,16 @@ class CsvWriter:
 
     def flush(self) -> None:
         table = self.buffer[:self.rows]
-        if self.names:
-            table = table.astype(object)
-            for column, names in self.names.items():
-                table[:, column] = names[table[:, column].astype(int)]
-        # one format over the whole block: the text ``np.savetxt`` writes row by row, in one string
+        text = None if self.decimals is None else format_rows(table, self.decimals)
+        if text is None:
+            if self.names:
+                table = table.astype(object)
+                for column, names in self.names.items():
+                    table[:, column] = names[table[:, column].astype(int)]
+            # one format over the whole block: the text ``np.savetxt`` writes row by row, in one string
+            text = (",".join(self.fmt) + "\n") * len(table) % tuple(table.ravel().tolist())
         try:
-            self.file.write((",".join(self.fmt) + "\n") * len(table) % tuple(table.ravel().tolist()))
+            self.file.write(text)
         except OSError as e:  # a full disk, say: the error names the file
             raise OSError(e.errno, e.strerror, self.file.name) from None
         self.rows = 0

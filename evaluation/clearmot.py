@@ -14,8 +14,8 @@ Per frame t (paper Sec. 2.1):
 1. Every correspondence (gt o, hyp h) matched in frame t-1 is kept if both o and h are present in frame t and
    their distance is ``<= threshold`` (kept even when another hypothesis is now nearer).
 2. The remaining ground-truth objects and hypotheses are matched with the Hungarian method
-   (``scipy.optimize.linear_sum_assignment``) on Euclidean distance: the largest number of pairs within the
-   threshold, and among those the smallest total distance. Pairs over the threshold are never matches.
+   (``pipeline.lsap``, SciPy's algorithm) on Euclidean distance: the largest number of pairs within the threshold,
+   and among those the smallest total distance. Pairs over the threshold are never matches.
 3. A newly made match (o, h) is an ID switch (mismatch) when o's last known correspondence -- the hypothesis it
    was last matched to in any earlier frame, which persists over frames in which o was unmatched -- is not h.
 4. Unmatched hypotheses are false positives, unmatched ground-truth objects are misses. The distances of all
@@ -56,8 +56,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
+
+from pipeline.lsap import linear_sum_assignment
 
 from .assignment import max_weight_matching
 from .metric import Result, accumulate

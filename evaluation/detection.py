@@ -61,9 +61,9 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from evaluation.tables import grown
+from pipeline.lsap import linear_sum_assignment
 
 __all__ = ["DetectionAccumulator", "DetectionScores", "detection_scores", "frame_true_positives", "pr_scores",
            "score_detections"]

@@ -13,7 +13,7 @@ is the 1 m gate of clearmot.py.
 1. Global alignment. In every frame each (gt, track) pair gets the soft IoU S / (row sum of S + column sum of S - S);
    summed over the frames per (gt id, track id) this is a soft count P of potential matches, and
    A = P / (n_gt + n_track - P), n being the number of frames each id is present in.
-2. Matching. Per frame, the Hungarian method (``scipy.optimize.linear_sum_assignment``) maximises the sum of A * S
+2. Matching. Per frame, the Hungarian method (``pipeline.lsap``, SciPy's algorithm) maximises the sum of A * S
    over the matched pairs. As in TrackEval, the code the benchmarks use, this one matching serves every alpha and a
    matched pair is a true positive (TP) at alpha when S >= alpha (up to 1e-12 of rounding). The paper's formulation
    leaves pairs below alpha out of the matching itself, a matching per alpha; that differs where a matched pair below
@@ -39,11 +39,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from evaluation.metric import Result, accumulate
 from evaluation.sequence import Sequence, frames_of
 from evaluation.tables import Slots, grown, pair_key, split_pair_key
+from pipeline.lsap import linear_sum_assignment
 
 __all__ = ["Hota", "HotaResult", "hota", "ALPHAS", "same_frame_pairs", "close_pairs", "matching_by_frame", "check_ids"]
 

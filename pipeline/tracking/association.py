@@ -28,9 +28,9 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from ..compiled import kernel
+from ..lsap import linear_sum_assignment
 from ..params import param
 
 __all__ = ["ASSOCIATIONS", "GreedyNN", "GlobalNN", "MultiNN", "checked_detections", "mahalanobis",

@@ -50,8 +50,8 @@ import heapq
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
+from pipeline.lsap import linear_sum_assignment
 from pipeline.types import DetectedPersons, TrackedPersons
 
 from ..params import param
@@ -149,7 +149,7 @@ def _solve(cost: np.ndarray) -> tuple[float, np.ndarray] | None:
 
 class KBestAssignments:
     """Murty's (1968) ranked assignments of cost [n, m] (n <= m; inf = forbidden), computed lazily on
-    ``scipy.optimize.linear_sum_assignment``; ``solution(k)`` is the k-th best (0-based) or None.
+    ``pipeline.lsap.linear_sum_assignment``; ``solution(k)`` is the k-th best (0-based) or None.
 
     Murty splits the solutions other than the best s into disjoint subproblems: for the branch rows r_1..r_K in
     order, subproblem i keeps s's cells of r_1..r_{i-1} and forbids s's cell of r_i. Branching only on

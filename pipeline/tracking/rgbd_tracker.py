@@ -41,9 +41,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 from scipy.special import gammaincinv
 
+from pipeline.lsap import linear_sum_assignment
 from pipeline.params import param
 from pipeline.tracking.association import checked_detections, mahalanobis
 from pipeline.tracking.online_boost import (BINS, POOL, SELECTORS, OnlineColourClassifier, colour_histogram,
