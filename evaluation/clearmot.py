@@ -53,12 +53,13 @@ a run of any length is scored as it streams.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.distance import cdist
 
-from pipeline.lsap import linear_sum_assignment
+from pipeline.compiled import kernel, pairwise
+from pipeline.lsap import assignment
 
 from .assignment import max_weight_matching
 from .metric import Result, accumulate
@@ -68,7 +69,6 @@ from .tables import Slots, grown, pair_key, split_pair_key
 __all__ = ["ClearMot", "ClearMotResult", "FrameResult", "evaluate"]
 
 _EMPTY_I = np.zeros(0, np.int64)
-_EMPTY_F = np.zeros(0, np.float64)
 _EMPTY_B = np.zeros(0, bool)
 GATHER_ROWS = 1 << 14  # counted persons and close pairs gathered over frames before they are counted per person
 
@@ -136,29 +136,6 @@ def _pos(a, n: int, name: str) -> np.ndarray:
     return pos
 
 
-def _lookup(keys_sorted: np.ndarray, values: np.ndarray, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Look ``query`` up in a map of sorted keys and aligned values: (found mask, values; junk where not found)."""
-    if keys_sorted.size == 0 or query.size == 0:
-        return np.zeros(query.size, bool), np.zeros(query.size, np.int64)
-    p = np.searchsorted(keys_sorted, query)
-    np.minimum(p, keys_sorted.size - 1, out=p)
-    return keys_sorted[p] == query, values[p]
-
-
-def _set(keys_sorted: np.ndarray, values: np.ndarray, key: np.ndarray, value: np.ndarray):
-    """The sorted map with ``key`` set to ``value`` (keys unique)."""
-    known, _ = _lookup(keys_sorted, values, key)
-    if known.any():
-        values = values.copy()
-        values[np.searchsorted(keys_sorted, key[known])] = value[known]
-    if not known.all():
-        k = np.concatenate([keys_sorted, key[~known]])
-        v = np.concatenate([values, value[~known]])
-        o = np.argsort(k)
-        keys_sorted, values = k[o], v[o]
-    return keys_sorted, values
-
-
 class ClearMot:
     """Accumulates CLEAR-MOT and the trajectory and identity measures over frames: a chunk of whole frames at a time
     (``add``, or ``scored_frames`` for each frame's result; evaluation/metric.py), or one frame given as arrays
@@ -200,7 +177,7 @@ class ClearMot:
         gt_ids, hyp_ids, ignore = self._checked(gt_ids, hyp_ids, gt_ignore)
         n, m = gt_ids.size, hyp_ids.size
         gt_pos, hyp_pos = _pos(gt_pos, n, "gt_pos"), _pos(hyp_pos, m, "hyp_pos")
-        return self._update(gt_ids, ignore, hyp_ids, cdist(gt_pos, hyp_pos) if n and m else np.zeros((n, m)))
+        return self._update(gt_ids, ignore, hyp_ids, _distances(gt_pos, hyp_pos))
 
     def update_dissimilarity(self, gt_ids: np.ndarray, hyp_ids: np.ndarray, dissimilarity: np.ndarray,
                              gt_ignore: np.ndarray | None = None) -> FrameResult:
@@ -208,7 +185,7 @@ class ClearMot:
         the ground: 1 - IoU of image boxes, say, with the threshold 0.5 for seed 003's 2D matching at IoU 0.5 (MOTP
         is then the mean of 1 - IoU over the matches)."""
         gt_ids, hyp_ids, ignore = self._checked(gt_ids, hyp_ids, gt_ignore)
-        d = np.asarray(dissimilarity, float)
+        d = np.ascontiguousarray(dissimilarity, float)
         if d.shape != (gt_ids.size, hyp_ids.size):
             raise ValueError(f"dissimilarity must be [{gt_ids.size}, {hyp_ids.size}], got {list(d.shape)}")
         return self._update(gt_ids, ignore, hyp_ids, d)
@@ -223,93 +200,27 @@ class ClearMot:
         return gt_ids, hyp_ids, ignore
 
     def _update(self, gt_ids, ignore, hyp_ids, dist) -> FrameResult:
-        n, m = gt_ids.size, hyp_ids.size
-        thr = self.threshold
-
-        # Step 1: keep last frame's correspondences that are still present and within the threshold.
-        gt_free = np.ones(n, bool)
-        hyp_free = np.ones(m, bool)
-        keep_g = keep_h = _EMPTY_I
-        had, prev_h = _lookup(self._prev_gt, self._prev_hyp, gt_ids)
-        if had.any() and m:
-            order = np.argsort(hyp_ids)
-            present, hj_all = _lookup(hyp_ids[order], order, prev_h)
-            cand = np.flatnonzero(had & present)
-            hj = hj_all[cand]
-            ok = dist[cand, hj] <= thr
-            keep_g, keep_h = cand[ok], hj[ok]
-            gt_free[keep_g] = False
-            hyp_free[keep_h] = False
-
-        # Step 2: Hungarian matching of the rest; the large finite cost of a forbidden pair exceeds any sum of
-        # allowed distances, so the solve maximises the number of allowed pairs first, then minimises distance.
-        new_g = new_h = _EMPTY_I
-        gi = np.flatnonzero(gt_free)
-        hi = np.flatnonzero(hyp_free)
-        if gi.size and hi.size:
-            allowed = dist[gi][:, hi] <= thr  # False for NaN
-            # only the rows and columns with an allowed pair can match
-            ur, uc = np.flatnonzero(allowed.any(axis=1)), np.flatnonzero(allowed.any(axis=0))
-            if ur.size:
-                gi, hi = gi[ur], hi[uc]
-                sub = allowed[ur][:, uc]
-                big = thr * min(ur.size, uc.size) + 1.0
-                r, c = linear_sum_assignment(np.where(sub, dist[gi][:, hi], big))
-                ok = sub[r, c]
-                new_g, new_h = gi[r[ok]], hi[c[ok]]
-
-        # Pairs with ignored persons: carried into the next frame, counted nowhere.
-        pair_g = np.concatenate([keep_g, new_g])
-        pair_h = np.concatenate([keep_h, new_h])
-        o = np.argsort(gt_ids[pair_g])
-        self._prev_gt, self._prev_hyp = gt_ids[pair_g][o], hyp_ids[pair_h][o]
-        counted_new = ~ignore[new_g]
-        new_g, new_h = new_g[counted_new], new_h[counted_new]
-
-        # Step 3: a new match contradicting the gt's last known correspondence is an ID switch; it is an id swap
-        # when the new hypothesis was last matched to another person.
-        new_gid, new_hid = gt_ids[new_g], hyp_ids[new_h]
-        known, last_h = _lookup(self._last_gt, self._last_hyp, new_gid)
-        switched = known & (last_h != new_hid)
-        switches = int(np.count_nonzero(switched))
-        if switches:
-            had_gt, its_gt = _lookup(self._hyp_key, self._hyp_gt, new_hid[switched])
-            self._swaps += int(np.count_nonzero(had_gt & (its_gt != new_gid[switched])))
-        if new_gid.size:
-            self._last_gt, self._last_hyp = _set(self._last_gt, self._last_hyp, new_gid, new_hid)
-            self._hyp_key, self._hyp_gt = _set(self._hyp_key, self._hyp_gt, new_hid, new_gid)
-
-        # Step 4: counts; matched pairs in ground-truth input order.
-        counted_keep = ~ignore[keep_g]
-        mg = np.concatenate([keep_g[counted_keep], new_g])
-        mh = np.concatenate([keep_h[counted_keep], new_h])
-        order = np.argsort(mg, kind="stable")
-        mg, mh = mg[order], mh[order]
-        md = dist[mg, mh]
-        k = mg.size
-        hyp_counted = np.ones(m, bool)
-        hyp_counted[pair_h[ignore[pair_g]]] = False  # matched to an ignored person
-        counted = np.flatnonzero(~ignore)
-        n_counted, m_counted = counted.size, int(hyp_counted.sum())
-        res = FrameResult(n_counted, k, m_counted - k, n_counted - k, switches, gt_ids[mg], hyp_ids[mh], md,
-                          new_gid[switched], hyp_ids[~hyp_counted])
+        """One frame's steps 1-4 (module docstring) in ``_frame``; the totals and the IDF1 gathering here."""
+        (self._prev_gt, self._prev_hyp, self._last_gt, self._last_hyp, self._hyp_key, self._hyp_gt, counts, dist_sum,
+         matched_gt, matched_hyp, distances, switched, excused, counted, matched, close_gt, close_hyp) = _frame(
+            gt_ids, ignore, hyp_ids, dist, self.threshold, self._prev_gt, self._prev_hyp, self._last_gt,
+            self._last_hyp, self._hyp_key, self._hyp_gt)
+        n_counted, k, m_counted, switches, swaps = counts.tolist()
         self._frames += 1
         self._gt += n_counted
         self._matches += k
         self._fp += m_counted - k
         self._fn += n_counted - k
         self._ids += switches
-        self._dist_sum += float(md.sum())
+        self._swaps += swaps
+        self._dist_sum += dist_sum
         self._hyps += m_counted
-
-        r, c = np.nonzero((dist <= thr) & ~ignore[:, None] & hyp_counted) if n_counted and m_counted else (_EMPTY_I, _EMPTY_I)
-        matched = np.zeros(n, bool)
-        matched[mg] = True
-        self._gathered.append((gt_ids[counted], matched[counted], gt_ids[r], hyp_ids[c]))
-        self._gathered_rows += n_counted + r.size
+        self._gathered.append((counted, matched, close_gt, close_hyp))
+        self._gathered_rows += n_counted + close_gt.size
         if self._gathered_rows >= GATHER_ROWS:
             self._absorb()
-        return res
+        return FrameResult(n_counted, k, m_counted - k, n_counted - k, switches, matched_gt, matched_hyp, distances,
+                           switched, excused)
 
     def _absorb(self) -> None:
         """The gathered frames into the per-person and per-pair counts. Per person, in frame order: a matched run
@@ -399,9 +310,145 @@ class ClearMot:
                 self._prev_gt = self._prev_hyp = _EMPTY_I  # a frame without rows between: nothing was matched in it
             self._last_frame = frame
             g, t = slice(gb[k], gb[k + 1]), slice(tb[k], tb[k + 1])
-            n, m = gb[k + 1] - gb[k], tb[k + 1] - tb[k]
-            dist = cdist(gt.position[g], tracks.position[t]) if n and m else np.zeros((n, m))
+            dist = _distances(gt.position[g], tracks.position[t])
             yield frame, self._update(gt.id[g], gt.ignore[g], tracks.id[t], dist)
+
+
+@kernel
+def _distances(a, b):
+    """The Euclidean distances [n, m] of points a [n, 2] and b [m, 2], as SciPy's ``cdist`` gives them."""
+    out = np.empty((len(a), len(b)))
+    for i in range(len(a)):
+        for j in range(len(b)):
+            dx, dy = a[i, 0] - b[j, 0], a[i, 1] - b[j, 1]
+            out[i, j] = math.sqrt(dx * dx + dy * dy)
+    return out
+
+
+@kernel
+def _find(keys, key):
+    """The place of ``key`` in the sorted ``keys``, or -1."""
+    p = np.searchsorted(keys, key)
+    return p if p < len(keys) and keys[p] == key else -1
+
+
+@kernel
+def _put(keys, values, new_keys, new_values):
+    """The sorted map (keys, values) with each of ``new_keys`` (unique) set to its value."""
+    values = values.copy()
+    fresh = np.zeros(len(new_keys), np.bool_)
+    for i in range(len(new_keys)):
+        p = _find(keys, new_keys[i])
+        if p >= 0:
+            values[p] = new_values[i]
+        else:
+            fresh[i] = True
+    if not fresh.any():
+        return keys, values
+    k, v = np.concatenate((keys, new_keys[fresh])), np.concatenate((values, new_values[fresh]))
+    order = np.argsort(k)
+    return k[order], v[order]
+
+
+@kernel
+def _frame(gt_ids, ignore, hyp_ids, dist, thr, prev_gt, prev_hyp, last_gt, last_hyp, hyp_key, hyp_gt):
+    """Steps 1-4 of one frame (module docstring) on the distances ``dist`` [n, m]. The state: last frame's pairs
+    (prev_gt -> prev_hyp, ignored ones included), each person's last hypothesis (last_gt -> last_hyp), each
+    hypothesis's last person (hyp_key -> hyp_gt), maps on sorted keys, returned updated. Then the counts (counted
+    persons, matches, counted hypotheses, ID switches, id swaps), the sum of the match distances (numpy's pairwise
+    order), the matches' ids and distances in ground-truth order, the switched persons, the excused hypotheses, the
+    counted persons with their matched flags, and the pairs of counted ids within the threshold."""
+    n, m = len(gt_ids), len(hyp_ids)
+    gt_free, hyp_free = np.ones(n, np.bool_), np.ones(m, np.bool_)
+    pair_g, pair_h = np.empty(min(n, m), np.int64), np.empty(min(n, m), np.int64)
+    # 1: last frame's pairs still present and within the threshold
+    kept = 0
+    if m and len(prev_gt):
+        order = np.argsort(hyp_ids)
+        by_id = hyp_ids[order]
+        for g in range(n):
+            p = _find(prev_gt, gt_ids[g])
+            if p >= 0:
+                q = _find(by_id, prev_hyp[p])
+                if q >= 0 and dist[g, order[q]] <= thr:
+                    pair_g[kept], pair_h[kept] = g, order[q]
+                    gt_free[g], hyp_free[order[q]] = False, False
+                    kept += 1
+    # 2: the rest matched by the Hungarian method, on the rows and columns with an allowed pair; a forbidden pair's
+    # cost exceeds any sum of allowed ones, so the most allowed pairs are made first, then the least distance
+    made = kept
+    gi, hi = np.flatnonzero(gt_free), np.flatnonzero(hyp_free)
+    row_allowed, column_allowed = np.zeros(len(gi), np.bool_), np.zeros(len(hi), np.bool_)
+    for a in range(len(gi)):
+        for b in range(len(hi)):
+            if dist[gi[a], hi[b]] <= thr:  # False for NaN
+                row_allowed[a], column_allowed[b] = True, True
+    gi, hi = gi[row_allowed], hi[column_allowed]
+    if len(gi):
+        big = thr * min(len(gi), len(hi)) + 1.0
+        cost = np.empty((len(gi), len(hi)))
+        for a in range(len(gi)):
+            for b in range(len(hi)):
+                d = dist[gi[a], hi[b]]
+                cost[a, b] = d if d <= thr else big
+        rows, columns, _ = assignment(cost, False)
+        for t in range(len(rows)):
+            g, h = gi[rows[t]], hi[columns[t]]
+            if dist[g, h] <= thr:
+                pair_g[made], pair_h[made] = g, h
+                made += 1
+    pair_g, pair_h = pair_g[:made], pair_h[:made]
+    # every pair carried into the next frame, ignored ones too, by gt id
+    by_gt = np.argsort(gt_ids[pair_g])
+    next_gt, next_hyp = gt_ids[pair_g][by_gt], hyp_ids[pair_h][by_gt]
+    # 3: a new counted match other than the person's last known correspondence is an ID switch; an id swap when its
+    # hypothesis was last another person's
+    new = pair_g[kept:][~ignore[pair_g[kept:]]]
+    new_gid, new_hid = gt_ids[new], hyp_ids[pair_h[kept:][~ignore[pair_g[kept:]]]]
+    switched = np.zeros(len(new), np.bool_)
+    for t in range(len(new)):
+        p = _find(last_gt, new_gid[t])
+        switched[t] = p >= 0 and last_hyp[p] != new_hid[t]
+    swaps = 0
+    for t in np.flatnonzero(switched):
+        p = _find(hyp_key, new_hid[t])
+        swaps += p >= 0 and hyp_gt[p] != new_gid[t]
+    if len(new):
+        last_gt, last_hyp = _put(last_gt, last_hyp, new_gid, new_hid)
+        hyp_key, hyp_gt = _put(hyp_key, hyp_gt, new_hid, new_gid)
+    # 4: the counts; the matches in ground-truth order
+    match_h = np.full(n, -1)
+    for t in range(made):
+        if not ignore[pair_g[t]]:
+            match_h[pair_g[t]] = pair_h[t]
+    mg = np.flatnonzero(match_h >= 0)
+    mh = match_h[mg]
+    md = np.empty(len(mg))
+    for t in range(len(mg)):
+        md[t] = dist[mg[t], mh[t]]
+    hyp_counted = np.ones(m, np.bool_)
+    for t in range(made):
+        if ignore[pair_g[t]]:
+            hyp_counted[pair_h[t]] = False
+    counted = np.flatnonzero(~ignore)
+    n_counted, m_counted = len(counted), int(hyp_counted.sum())
+    close = 0
+    if n_counted and m_counted:
+        for g in counted:
+            for h in range(m):
+                close += dist[g, h] <= thr and hyp_counted[h]
+    close_gt, close_hyp = np.empty(close, np.int64), np.empty(close, np.int64)
+    if close:
+        at = 0
+        for g in counted:
+            for h in range(m):
+                if dist[g, h] <= thr and hyp_counted[h]:
+                    close_gt[at], close_hyp[at] = gt_ids[g], hyp_ids[h]
+                    at += 1
+    counts = np.array([n_counted, len(mg), m_counted, int(switched.sum()), swaps])
+    return (next_gt, next_hyp, last_gt, last_hyp, hyp_key, hyp_gt, counts, pairwise(md, 0, len(md)), gt_ids[mg],
+            hyp_ids[mh], md, new_gid[switched], hyp_ids[~hyp_counted], gt_ids[counted], match_h[counted] >= 0,
+            close_gt, close_hyp)
 
 
 def evaluate(gt: Sequence, tracks: Sequence, threshold: float = 1.0) -> dict:

@@ -359,3 +359,13 @@ def test_image_boxes_match_at_iou_half_and_motp_is_the_mean_of_one_minus_iou():
     assert s.motp_m == pytest.approx(0.4) and s.mota == pytest.approx(0.0)  # mean IoU of the matches: 0.6
     with pytest.raises(ValueError, match=r"dissimilarity must be \[2, 2\], got \[2, 1\]"):
         cm.update_dissimilarity(np.array([1, 2]), np.array([7, 8]), np.zeros((2, 1)))
+
+
+def test_distances_are_euclidean_on_the_ground():
+    from evaluation.clearmot import _distances
+
+    # a 3-4-5 triangle and a point onto itself; no rows or no columns give an empty matrix of the right shape
+    d = _distances(np.array([[0.0, 0.0], [1.0, 1.0]]), np.array([[3.0, 4.0], [1.0, 1.0]]))
+    assert d.tolist() == [[5.0, np.sqrt(2.0)], [np.sqrt(13.0), 0.0]]
+    assert _distances(np.zeros((0, 2)), np.zeros((3, 2))).shape == (0, 3)
+    assert _distances(np.zeros((2, 2)), np.zeros((0, 2))).shape == (2, 0)
