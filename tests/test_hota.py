@@ -193,3 +193,18 @@ def test_matches_the_plain_reference_on_random_sequences():
             np.testing.assert_allclose(r["per_alpha"][key], ref[key], atol=1e-12, err_msg=key)
             assert r[key] == pytest.approx(np.mean(ref[key]), abs=1e-12)
     assert compared > 40
+
+
+def test_close_pairs_worked_by_hand():
+    from evaluation.hota import close_pairs
+
+    # frame 0: gt 1 at the origin, gt 2 at (10, 0); tracks 5 at (3, 4) (5 m from gt 1) and 6 at (1, 0);
+    # frame 1: gt 1 at the origin, track 5 at (NaN, 0) (never close); frame 2 has tracks only
+    gt = Sequence.from_rows(np.array([0, 0, 1]), np.array([1, 2, 1]), np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 0.0]]))
+    tracks = Sequence.from_rows(np.array([0, 0, 1, 2]), np.array([5, 6, 5, 5]),
+                                np.array([[3.0, 4.0], [1.0, 0.0], [np.nan, 0.0], [0.0, 0.0]]))
+    rows, cols, d = close_pairs(gt, tracks, 5.0)  # strictly closer: (3, 4) at exactly 5 m is left out
+    assert rows.tolist() == [0] and cols.tolist() == [1] and d.tolist() == [1.0]
+    rows, cols, d = close_pairs(gt, tracks, 5.5)
+    assert rows.tolist() == [0, 0] and cols.tolist() == [0, 1] and d.tolist() == [5.0, 1.0]
+    assert [a.size for a in close_pairs(gt, tracks.select(np.zeros(4, bool)), 5.0)] == [0, 0, 0]
