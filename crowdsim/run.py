@@ -35,6 +35,7 @@ from evaluation.navigation_report import json_safe
 from evaluation.group_score import groups_table, score_groups
 from evaluation.score import score_tracking, tracking_table
 from evaluation.stream import CsvPair
+from pipeline.compiled import kernel
 from pipeline.frames import compose, inverse
 from scenarios.typed import Scenario, as_written
 
@@ -85,11 +86,22 @@ def _row_of(ids: np.ndarray, query: np.ndarray) -> np.ndarray:
 
 def _relation_rows(frame) -> np.ndarray:
     r, tracks = frame.relations, frame.tracks
-    a, b = _row_of(tracks.track_id, r.track_a), _row_of(tracks.track_id, r.track_b)
-    near = np.hypot(*(tracks.position[a] - tracks.position[b]).T) <= RELATIONS_WRITTEN
+    near = _near(tracks.track_id, tracks.position, r.track_a, r.track_b, RELATIONS_WRITTEN)
     n = int(near.sum())
     return np.column_stack([np.full(n, frame.index), np.full(n, frame.stamp), r.track_a[near], r.track_b[near],
                             r.strength[near]])
+
+
+@kernel
+def _near(ids, position, a, b, reach):
+    """Which relations (track ids a, b; all among ``ids``) join tracks within ``reach`` of each other (m)."""
+    order = np.argsort(ids)
+    by_id = ids[order]
+    near = np.empty(len(a), np.bool_)
+    for k in range(len(a)):
+        i, j = order[np.searchsorted(by_id, a[k])], order[np.searchsorted(by_id, b[k])]
+        near[k] = math.hypot(position[i, 0] - position[j, 0], position[i, 1] - position[j, 1]) <= reach
+    return near
 
 
 def _group_rows(frame) -> np.ndarray:

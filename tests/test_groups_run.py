@@ -44,6 +44,15 @@ def test_relations_csv_holds_each_near_pair_once(tiny_run):
     assert ((rel["strength"] >= 0) & (rel["strength"] <= 1)).all()
 
 
+def test_near_relations_worked_by_hand():
+    from crowdsim.run import _near
+
+    # tracks 7 at (0, 0), 3 at (3, 4), 9 at (10, 0): 7-3 are 5 m apart (within, inclusive), 3-9 and 7-9 farther
+    ids, xy = np.array([7, 3, 9]), np.array([[0.0, 0.0], [3.0, 4.0], [10.0, 0.0]])
+    assert _near(ids, xy, np.array([7, 3, 9]), np.array([3, 9, 7]), 5.0).tolist() == [True, False, False]
+    assert _near(ids, xy, np.array([7]), np.array([3]), 4.99).tolist() == [False]
+
+
 def test_metrics_have_the_groups_and_evaluate_reproduces_them_exactly(tiny_run, tmp_path, capsys):
     metrics = json.loads((tiny_run / "metrics.json").read_text())
     groups = metrics["groups"]
