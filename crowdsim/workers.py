@@ -14,6 +14,7 @@ import signal
 import threading
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
+from functools import partial
 from multiprocessing import get_context
 from typing import NamedTuple
 
@@ -122,22 +123,36 @@ def run_all(fn, items: list, *args, engine: Engine = Engine(), desc: str = "runs
             progress: bool = True) -> list:
     """``[fn(item, *args) for item in items]``, in that order, on ``engine``, with a progress bar; ``fn`` must be
     importable (a module's function) for worker processes and Ray."""
+    with runner(engine) as run:
+        return run(fn, items, *args, desc=desc, unit=unit, progress=progress)
+
+
+@contextmanager
+def runner(engine: Engine = Engine()):
+    """``run_all`` for many calls on one engine: the worker processes (or the Ray session) start once for the
+    block, not once a call (a study of many small batches would otherwise pay the start-up each time)."""
+    if engine.ray is not None:
+        with ray_session(engine.ray, engine.workers) as ray:
+            task = ray.remote(num_cpus=1)(_call)  # (a Ray task is a Python function; fn may be a builtin)
+
+            def results(fn, items, args):
+                shared = [ray.put(a) for a in args]
+                return ray_results(ray, [task.remote(fn, item, *shared) for item in items])
+
+            yield partial(_run, results)
+    elif engine.workers <= 1:
+        yield partial(_run, lambda fn, items, args: ((k, fn(item, *args)) for k, item in enumerate(items)))
+    else:
+        with process_pool(engine.workers) as pool:
+            yield partial(_run, lambda fn, items, args: enumerate(
+                pool.map(fn, items, *([a] * len(items) for a in args))))
+
+
+def _run(results, fn, items: list, *args, desc: str = "runs", unit: str = "run", progress: bool = True) -> list:
+    """The results of ``fn`` over ``items`` from ``results`` ((index, result) pairs in any order), in order."""
     out = [None] * len(items)
     with tqdm(total=len(items), unit=unit, desc=desc, disable=not progress) as bar:
-        if engine.ray is not None:
-            with ray_session(engine.ray, engine.workers) as ray:
-                task = ray.remote(num_cpus=1)(_call)  # (a Ray task is a Python function; fn may be a builtin)
-                shared = [ray.put(a) for a in args]
-                for k, result in ray_results(ray, [task.remote(fn, item, *shared) for item in items]):
-                    out[k] = result
-                    bar.update()
-        elif engine.workers <= 1:
-            for k, item in enumerate(items):
-                out[k] = fn(item, *args)
-                bar.update()
-        else:
-            with process_pool(engine.workers) as pool:
-                for k, result in enumerate(pool.map(fn, items, *([a] * len(items) for a in args))):
-                    out[k] = result
-                    bar.update()
+        for k, result in results(fn, items, args):
+            out[k] = result
+            bar.update()
     return out

@@ -1,5 +1,6 @@
 """``crowdsim experiment tune`` on a tiny study: the recorded scans measure a pipeline as the run does, a study
-resumes from its storage, and best.yaml is a scenario that loads and carries the best trial's pipeline."""
+resumes from its storage, best.yaml is a scenario that loads and carries the best trial's pipeline, and a batch of
+trials gives the same study on any number of workers."""
 
 import json
 
@@ -7,7 +8,10 @@ import optuna
 import pytest
 import yaml
 
+import crowdsim.experiments.tune as tune_module
+from crowdsim.cli import main
 from crowdsim.experiments.tune import SCENARIO, Recorded, suggest, tune
+from crowdsim.workers import Engine
 from crowdsim.loop import Simulation
 from scenarios import load_scenario
 from crowdsim.scoring import score_cycles
@@ -42,3 +46,32 @@ def test_a_study_resumes_and_writes_a_scenario_of_its_best_trial(tmp_path):
     assert second["held_out_mota_airport"] == held_out.mota(None)
     assert json.loads((tmp_path / "b" / "results.json").read_text()) == second
     assert (tmp_path / "b" / "history.png").stat().st_size > 5_000
+
+
+def test_a_batch_of_trials_gives_the_same_study_on_one_or_two_workers(tmp_path):
+    kw = dict(duration=1.0, progress=False, train_seeds=(100, 101), held_out_seeds=(200,), batch=2)
+    (tmp_path / "one").mkdir()
+    (tmp_path / "two").mkdir()
+    one = tune(tmp_path / "one", 3, engine=Engine(1), **kw)
+    two = tune(tmp_path / "two", 3, engine=Engine(2), **kw)
+    assert one["trials"] == 3  # batches of 2 and 1
+    assert one == two
+    assert (tmp_path / "one" / "best.yaml").read_bytes() == (tmp_path / "two" / "best.yaml").read_bytes()
+
+
+def test_a_batch_that_fails_is_kept_in_the_storage_as_failed_trials(tmp_path, monkeypatch):
+    def broken(task, scenario):
+        raise RuntimeError("a broken pipeline")
+
+    monkeypatch.setattr(tune_module, "_mota", broken)
+    storage = f"sqlite:///{tmp_path / 'study.db'}"
+    with pytest.raises(RuntimeError, match="a broken pipeline"):
+        tune(tmp_path, 5, storage=storage, duration=1.0, progress=False, train_seeds=(100,), batch=2)
+    study = optuna.load_study(study_name="crowdsim-airport", storage=storage)
+    assert [t.state for t in study.trials] == [optuna.trial.TrialState.FAIL] * 2  # the first batch, not run on
+
+
+def test_a_batch_below_one_is_refused(tmp_path, capsys):
+    assert main(["experiment", "tune", "--batch", "0", "--out", str(tmp_path / "t")]) == 2
+    assert "--batch 0: expected a count of trials >= 1" in capsys.readouterr().err
+    assert not (tmp_path / "t").exists()

@@ -2,8 +2,12 @@
 airport's training seeds, as seed 000 did with pySMAC (Sec. IV-E), and reports the best on held-out seeds.
 
 The training seeds' scans are recorded once (``recorded``); each trial runs its pipeline on them and scores MOTA as
-the run does (seed 000's evaluation: 1 m, 20 m range, occluded ignored), which a test shows is the run's own MOTA. The sampler is Optuna's TPE, seeded, so a study of the same trials
-gives the same parameters. With ``--storage`` (e.g. ``sqlite:///study.db``) a study resumes where it stopped. The
+the run does (seed 000's evaluation: 1 m, 20 m range, occluded ignored), which a test shows is the run's own MOTA.
+The sampler is Optuna's TPE, seeded, so a study of the same trials gives the same parameters. The recordings and
+each trial's runs go to the command's engine (``--workers``, ``--ray``: crowdsim/workers.py); ``--batch B`` asks B
+trials at once, so that more runs than seeds are in flight, and tells their results in order. Which parameters are
+tried depends on B (a trial is drawn knowing the results of the batches before its own), never on the engine or
+the number of workers. With ``--storage`` (e.g. ``sqlite:///study.db``) a study resumes where it stopped. The
 result: ``best.yaml``, a scenario file that starts from the airport (``base:``) and sets the best pipeline;
 ``history.png``, every trial's MOTA and the best so far; ``results.json``, the best against the airport's own
 pipeline on the held-out seeds. Needs the ``tune`` extra (optuna).
@@ -24,6 +28,8 @@ from scenarios.format import PIPELINE
 from scenarios.schema import validate
 from scenarios.typed import plain, typed
 
+from .. import workers
+from ..workers import Engine, run_all, runner
 from .recorded import detect, record, track
 
 SCENARIO = "airport_disembarkation"
@@ -72,48 +78,70 @@ def suggest(trial) -> dict:
 
 
 class Recorded:
-    """The airport's scans over ``seeds`` (recorded once), on which a pipeline section's MOTA is measured."""
+    """The airport's scans over ``seeds`` (recorded once), on which pipeline sections' MOTA is measured; ``run`` is
+    where the recordings and the measurements run (``run_all``, or a ``runner``'s for many calls on one engine)."""
 
-    def __init__(self, seeds, duration: float, progress: bool = False):
+    def __init__(self, seeds, duration: float, progress: bool = False, run=run_all):
         self.scenario = load_scenario(SCENARIO)
-        self.runs = [record(self.scenario, seed, duration)
-                     for seed in tqdm(seeds, unit="seed", desc="recording", disable=not progress)]
+        self.run = run
+        self.runs = run(_recording, list(seeds), duration, desc="recording", unit="seed", progress=progress)
 
     def mota(self, pipeline: dict | None) -> float:
         """Mean MOTA (%) over the recorded seeds of ``pipeline`` (None: the airport's own)."""
-        spec = (self.scenario.pipeline if pipeline is None
-                else typed(validate(pipeline, PIPELINE, "<tune>", "pipeline"), PIPELINE))
-        threshold = self.scenario.evaluation.threshold
-        scores = []
-        for cycles in self.runs:
-            detections = detect(cycles, spec, self.scenario.map)
-            tracker = build_part(plain(spec.tracker), TRACKERS)
-            scores.append(100 * track(cycles, detections, tracker, threshold)[0]["all"].mota)
-        return float(np.mean(scores))
+        return self.motas([pipeline])[0]
+
+    def motas(self, pipelines: list[dict | None]) -> list[float]:
+        """``[mota(p) for p in pipelines]``, every (pipeline, seed) run at once on the engine."""
+        tasks = [(p, cycles) for p in pipelines for cycles in self.runs]
+        scores = np.array(self.run(_mota, tasks, self.scenario, progress=False)).reshape(len(pipelines),
+                                                                                       len(self.runs))
+        return [float(np.mean(row)) for row in scores]
+
+
+def _recording(seed: int, duration: float) -> list:
+    """The airport's scans from ``seed``: one task of ``Recorded``."""
+    return record(load_scenario(SCENARIO), seed, duration)
+
+
+def _mota(task, scenario) -> float:
+    """MOTA (%) of a pipeline section (None: the scenario's own) on one recorded run: one task of ``motas``."""
+    pipeline, cycles = task
+    spec = (scenario.pipeline if pipeline is None
+            else typed(validate(pipeline, PIPELINE, "<tune>", "pipeline"), PIPELINE))
+    detections = detect(cycles, spec, scenario.map)
+    tracker = build_part(plain(spec.tracker), TRACKERS)
+    return 100 * track(cycles, detections, tracker, scenario.evaluation.threshold)[0]["all"].mota
 
 
 def tune(out: Path, trials: int, storage: str | None = None, study_name: str = "crowdsim-airport",
          duration: float = 60.0, seed: int = 0, progress: bool = True, train_seeds=TRAIN_SEEDS,
-         held_out_seeds=HELD_OUT_SEEDS) -> dict:
-    """Run ``trials`` more trials of the study (new, or resumed from ``storage``) and write best.yaml, history.png
-    and results.json into ``out``; returns the results."""
+         held_out_seeds=HELD_OUT_SEEDS, engine: Engine = Engine(), batch: int = 1) -> dict:
+    """Run ``trials`` more trials of the study (new, or resumed from ``storage``), ``batch`` at a time, and write
+    best.yaml, history.png and results.json into ``out``; returns the results."""
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     study = optuna.create_study(study_name=study_name, storage=storage, direction="maximize", load_if_exists=True,
                                 sampler=optuna.samplers.TPESampler(seed=seed))
-    train = Recorded(train_seeds, duration, progress)
-    bar = tqdm(total=trials, unit="trial", disable=not progress, desc="tune")
-    try:
-        study.optimize(lambda t: train.mota(suggest(t)), n_trials=trials,
-                       callbacks=[lambda s, t: bar.update()])
-    finally:
-        bar.close()
-    best = suggest(optuna.trial.FixedTrial(study.best_params))
-    held_out = Recorded(held_out_seeds, duration, progress)
+    with runner(engine) as run:
+        train = Recorded(train_seeds, duration, progress, run)
+        with tqdm(total=trials, unit="trial", disable=not progress, desc="tune") as bar:
+            for first in range(0, trials, batch):
+                asked = [study.ask() for _ in range(min(batch, trials - first))]
+                try:
+                    values = train.motas([suggest(t) for t in asked])
+                except BaseException:  # a stop or a failure: the study (in its storage) keeps these as failed
+                    for t in asked:
+                        study.tell(t, state=optuna.trial.TrialState.FAIL)
+                    raise
+                for t, value in zip(asked, values):
+                    study.tell(t, value)
+                bar.update(len(asked))
+        best = suggest(optuna.trial.FixedTrial(study.best_params))
+        held_out_best, held_out_airport = Recorded(held_out_seeds, duration, progress, run).motas([best, None])
     results = {"trials": len(study.trials), "best_train_mota": study.best_value, "best_params": study.best_params,
                "train_seeds": list(train_seeds), "held_out_seeds": list(held_out_seeds), "duration_s": duration,
-               "held_out_mota_best": held_out.mota(best), "held_out_mota_airport": held_out.mota(None)}
+               "held_out_mota_best": held_out_best, "held_out_mota_airport": held_out_airport}
     (out / "best.yaml").write_text(f"# crowdsim experiment tune: the best of {len(study.trials)} trials, MOTA "
                                    f"{study.best_value:.1f}% on seeds {list(train_seeds)}\n"
                                    + yaml.safe_dump({"base": SCENARIO, "name": f"{SCENARIO}_tuned",
@@ -147,6 +175,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--storage", help="an Optuna storage to keep and resume the study, e.g. sqlite:///study.db")
     parser.add_argument("--duration", type=float, default=60.0, help="s of each airport run (default 60)")
     parser.add_argument("--seed", type=int, default=0, help="the sampler's seed (default 0)")
+    parser.add_argument("--batch", type=int, default=1,
+                        help="trials asked at once, run side by side (default 1: each trial knows every earlier "
+                             "result); the trials tried depend on it, not on --workers or --ray")
+    workers.add_arguments(parser)
     add_out_argument(parser, "tune")
 
 
@@ -160,9 +192,12 @@ def main(args) -> int:
     except ImportError as e:
         raise UsageError(f'experiment tune: needs {e.name}: pip install -e ".[tune]"') from None
     check_duration(args)
+    if args.batch < 1:
+        raise UsageError(f"--batch {args.batch}: expected a count of trials >= 1")
+    engine = Engine(args.workers, args.ray)
     out = run_dir(args, "tune")
     r = write_directory(out, lambda tmp: tune(tmp, args.trials, args.storage, duration=args.duration,
-                                              seed=args.seed))
+                                              seed=args.seed, engine=engine, batch=args.batch))
     print(f"{r['trials']} trials; best MOTA {r['best_train_mota']:.1f}% on the training seeds; held out: "
           f"{r['held_out_mota_best']:.1f}% against the airport's own {r['held_out_mota_airport']:.1f}%; "
           f"{out / 'best.yaml'}")
