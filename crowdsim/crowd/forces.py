@@ -54,13 +54,19 @@ def moussaid_pair(dx, dy, dvx, dvy, strength, lam, gamma, n, n_prime, reach):
     sign while |D|, B and theta do not, so j feels -(b + s): one evaluation gives both. At theta = 0 (a perfectly
     symmetric head-on meeting) there is no turning term, as in the paper (K = theta / |theta|); the random force
     breaks such ties. A pair whose force cannot reach NEGLIGIBLE (d >= ``reach`` |D|) gives zeros."""
-    d = max(math.sqrt(dx * dx + dy * dy), 1e-9)
-    ex, ey = dx / d, dy / d
-    Dx, Dy = ex - lam * dvx, ey - lam * dvy
-    nD = math.sqrt(Dx * Dx + Dy * Dy)
+    d, ex, ey, Dx, Dy, nD = _moussaid_geometry(dx, dy, dvx, dvy, lam)
     if not d < reach * nD:
         return 0.0, 0.0, 0.0, 0.0
     return _moussaid_within(d, ex, ey, Dx, Dy, nD, strength, gamma, n, n_prime)
+
+
+@kernel
+def _moussaid_geometry(dx, dy, dvx, dvy, lam):
+    """``moussaid_pair``'s distance d, unit vector e, interaction vector D and |D| of the differences j - i."""
+    d = max(math.sqrt(dx * dx + dy * dy), 1e-9)
+    ex, ey = dx / d, dy / d
+    Dx, Dy = ex - lam * dvx, ey - lam * dvy
+    return d, ex, ey, Dx, Dy, math.sqrt(Dx * Dx + Dy * Dy)
 
 
 @kernel
@@ -131,10 +137,7 @@ def moussaid2009(pos, vel, order, interaction_range, strength, lam, gamma, n, n_
                     diff[2, found], diff[3, found] = vel[j, 0] - vel[i, 0], vel[j, 1] - vel[i, 1]
                     found += dx * dx + dy * dy <= range2
         for k in range(found):  # moussaid_pair's test of reach, its operations on all at once (vectorized)
-            d = max(math.sqrt(diff[0, k] * diff[0, k] + diff[1, k] * diff[1, k]), 1e-9)
-            ex, ey = diff[0, k] / d, diff[1, k] / d
-            Dx, Dy = ex - lam * diff[2, k], ey - lam * diff[3, k]
-            nD = math.sqrt(Dx * Dx + Dy * Dy)
+            d, ex, ey, Dx, Dy, nD = _moussaid_geometry(diff[0, k], diff[1, k], diff[2, k], diff[3, k], lam)
             geometry[0, k], geometry[1, k], geometry[2, k] = d, ex, ey
             geometry[3, k], geometry[4, k], geometry[5, k] = Dx, Dy, nD
             seen[k] = d < reach * nD
