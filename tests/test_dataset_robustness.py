@@ -369,7 +369,8 @@ def test_sigint_stops_generate_keeping_the_complete_episodes(room_file, tmp_path
 @pytest.mark.parametrize("workers", [1, 2])
 def test_sigterm_stops_generate_keeping_the_complete_episodes_with_one_line(room_file, tmp_path, workers):
     proc, err, out, cmd = _stop_halfway(room_file, tmp_path, signal.SIGTERM, workers)
-    assert proc.returncode in (-signal.SIGTERM, 128 + signal.SIGTERM), err  # ended by the signal, as its caller expects
+    # ended by the signal, as its caller expects
+    assert proc.returncode in (-signal.SIGTERM, 128 + signal.SIGTERM), err
     kept = assert_tidy_dataset(out, 8)
     assert 1 <= len(kept) < 8
     assert "Traceback" not in err

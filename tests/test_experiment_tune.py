@@ -11,10 +11,10 @@ import yaml
 import crowdsim.experiments.tune as tune_module
 from crowdsim.cli import main
 from crowdsim.experiments.tune import SCENARIO, Recorded, suggest, tune
-from crowdsim.workers import Engine
 from crowdsim.loop import Simulation
-from scenarios import load_scenario
 from crowdsim.scoring import score_cycles
+from crowdsim.workers import Engine
+from scenarios import load_scenario
 
 
 def test_recorded_mota_is_the_runs_own():

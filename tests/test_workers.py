@@ -14,7 +14,6 @@ def test_runs_come_back_in_their_order_on_every_engine():
         assert run_all(operator.pow, list(range(10)), 3, engine=engine, progress=False) == expected
 
 
-
 def _pid(item) -> int:
     return os.getpid()
 

@@ -93,9 +93,8 @@ class Recorded:
     def motas(self, pipelines: list[dict | None]) -> list[float]:
         """``[mota(p) for p in pipelines]``, every (pipeline, seed) run at once on the engine."""
         tasks = [(p, cycles) for p in pipelines for cycles in self.runs]
-        scores = np.array(self.run(_mota, tasks, self.scenario, progress=False)).reshape(len(pipelines),
-                                                                                       len(self.runs))
-        return [float(np.mean(row)) for row in scores]
+        scores = np.array(self.run(_mota, tasks, self.scenario, progress=False))
+        return [float(np.mean(row)) for row in scores.reshape(len(pipelines), len(self.runs))]
 
 
 def _recording(seed: int, duration: float) -> list:
