@@ -3,7 +3,12 @@
 command prints one line saying what was kept, and the process exits with the status a shell gives a process ended
 by that signal (128 + its number: 143, 130). It exits rather than kills itself, so that the interpreter's own
 clean-up runs too (multiprocessing's semaphores, which a process killed by a signal leaves to its resource tracker to
-complain about). Worker processes ignore both: the main process alone decides what to keep and ends them."""
+complain about). Worker processes ignore both: the main process alone decides what to keep and ends them.
+
+Python runs a signal's handler between two bytecodes of the main thread, wherever it is. Where that is a finalizer
+(``__del__``, a weakref callback: the garbage collector's work), the exception cannot leave it: Python prints
+"Exception ignored in ..." and goes on, and the stop would be lost (the command ran to its end with status 0). A
+stop swallowed so is raised again a moment later (SIGALRM, ``RETRY_S``) from wherever the main thread is then."""
 
 from __future__ import annotations
 
@@ -12,6 +17,7 @@ import sys
 from contextlib import contextmanager
 
 SIGNALS = (signal.SIGTERM, signal.SIGINT)
+RETRY_S = 0.001  # s after a swallowed stop that it is raised again (out of the finalizer by then)
 
 
 class Stopped(KeyboardInterrupt):
@@ -25,6 +31,10 @@ class Stopped(KeyboardInterrupt):
 def _raise_stopped(signum, frame) -> None:
     for s in SIGNALS:  # a second signal must not cut the clean-up short
         signal.signal(s, signal.SIG_IGN)
+    _stop(signum)
+
+
+def _stop(signum: int) -> None:
     lock = getattr(sys.modules.get("numba.core.compiler_lock"), "global_compiler_lock", None)
     if lock is not None and lock.is_locked():
         _raise_when_unlocked(lock, signum)
@@ -52,11 +62,28 @@ def _raise_when_unlocked(lock, signum: int) -> None:
 
 @contextmanager
 def stops_as_exceptions():
-    """Within the block, SIGTERM and SIGINT raise ``Stopped``; the handlers before it come back after."""
+    """Within the block, SIGTERM and SIGINT raise ``Stopped`` (again, where a finalizer swallowed it); the handlers
+    and ``sys.unraisablehook`` before it come back after."""
     before = {s: signal.signal(s, _raise_stopped) for s in SIGNALS}
+    hook, alarm = sys.unraisablehook, []  # alarm: SIGALRM's handler before, once a retry has taken it
+
+    def swallowed(unraisable) -> None:
+        if not isinstance(unraisable.exc_value, Stopped):
+            hook(unraisable)
+            return
+        signum = unraisable.exc_value.signum
+        previous = signal.signal(signal.SIGALRM, lambda *_: _stop(signum))
+        alarm[:] = alarm or [previous]
+        signal.setitimer(signal.ITIMER_REAL, RETRY_S)
+
+    sys.unraisablehook = swallowed
     try:
         yield
     finally:
+        sys.unraisablehook = hook
+        if alarm:
+            signal.setitimer(signal.ITIMER_REAL, 0.0)
+            signal.signal(signal.SIGALRM, alarm[0])
         for s, handler in before.items():
             signal.signal(s, handler)
 

@@ -59,3 +59,30 @@ def test_a_stop_while_numba_compiles_comes_when_the_kernel_is_made():
     with stops_as_exceptions():
         with pytest.raises(Stopped):
             _raise_stopped(signal.SIGINT, None)
+
+
+def test_a_stop_that_lands_in_a_finalizer_is_raised_again_outside_it(capfd):
+    """A signal whose handler runs inside a finalizer (``__del__``, a weakref callback) cannot raise there: Python
+    prints "Exception ignored" and goes on. Stop 41's and 42's flake: generate then ran to its end with status 0.
+    The stop comes again a moment later, where the main thread is then, and nothing is printed."""
+    import time
+
+    from crowdsim.stops import Stopped, stops_as_exceptions
+
+    class Dropped:
+        def __del__(self):
+            signal.raise_signal(signal.SIGTERM)  # its handler runs here, inside the finalizer
+            self.after = True  # a bytecode boundary after the signal
+
+    with stops_as_exceptions():
+        with pytest.raises(Stopped) as stop:
+            Dropped()  # finalized at once
+            reached = True  # the finalizer swallowed the first raise
+            deadline = time.monotonic() + 5.0
+            while time.monotonic() < deadline:
+                pass
+            pytest.fail("the swallowed stop was not raised again")
+    assert reached and stop.value.signum == signal.SIGTERM
+    assert "Exception ignored" not in capfd.readouterr().err
+    assert signal.getsignal(signal.SIGALRM) == signal.SIG_DFL and signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
+    assert signal.getsignal(signal.SIGTERM) != signal.SIG_IGN  # the handlers before came back
