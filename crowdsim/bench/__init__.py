@@ -1,6 +1,7 @@
 """The benchmarks of ``crowdsim bench``: the hot parts and the whole loop (``parts``), the crowd beside JuPedSim
 (``sim``), every sensor (``sensors``), the evaluation (``eval``), the gym environments (``env``) and dataset
-generation (``dataset``), and the speed figures beside an older checkout's (``speed``). Each is a subcommand whose module declares its own flags and runs it
+generation (``dataset``), the speed figures beside an older checkout's (``speed``), and the floors under those not met
+(``floors``). Each is a subcommand whose module declares its own flags and runs it
 (``crowdsim.cli.Command``); ``BENCHMARKS`` gathers them."""
 
 from ..cli import Command
@@ -16,4 +17,6 @@ BENCHMARKS = (
     Command("dataset", "a dataset episode's frames/s and bytes per frame", "crowdsim.bench.dataset"),
     Command("speed", "the loop's, the crowd's and the environments' speed in CPU time, side by side with an older "
                      "checkout's (--against DIR)", "crowdsim.bench.speed"),
+    Command("floors", "for the speed targets not met, the CPU of the work each figure cannot shed and the figure it "
+                      "allows", "crowdsim.bench.floors"),
 )

@@ -15,10 +15,11 @@ import tempfile
 import time
 
 
-def loop(scenario: str, duration: float) -> dict:
+def loop(scenario: str, duration: float, timing=None) -> dict:
     """Simulated seconds per CPU second of ``scenario``'s loop after its warm-up (what ``Simulation.frames`` does:
     sensors, robot software, ground truth). A first second runs untimed, so that a fresh checkout's compiling of
-    its kernels (a one-off cost of the first run after an install, not of the loop) is not timed."""
+    its kernels (a one-off cost of the first run after an install, not of the loop) is not timed. ``timing()`` is
+    called where the timing starts (``floors.py`` times parts of the same window)."""
     from crowdsim.loop import Simulation
     from scenarios import load_scenario
 
@@ -26,6 +27,8 @@ def loop(scenario: str, duration: float) -> dict:
     sim.warm_up()
     for _ in sim.frames(1.0):
         pass
+    if timing:
+        timing()
     cpu = time.process_time()
     for _ in sim.frames(duration):
         pass
@@ -91,11 +94,12 @@ def crowd_among_walls(agents: int, steps: int) -> dict:
     return _stepped(walkers, 3, steps)
 
 
-def env(observation: str, envs: int, people: int, steps: int, untimed: int = 20) -> dict:
+def env(observation: str, envs: int, people: int, steps: int, untimed: int = 20, timing=None) -> dict:
     """Environment steps per CPU second of ``crowdsim/Navigate-v0`` with random actions (all sub-environments'
     steps of a native vector environment, ``envs`` > 1), resetting where an episode ends, timed after ``untimed``
     steps and, for one environment, its first episode end (which loads the navigation metrics' compiled kernels
-    from their cache once a process, as the untimed steps load the rest: start-up, not stepping)."""
+    from their cache once a process, as the untimed steps load the rest: start-up, not stepping); ``timing()`` is
+    called where the timing starts."""
     import gymnasium as gym
     import numpy as np
 
@@ -120,6 +124,8 @@ def env(observation: str, envs: int, people: int, steps: int, untimed: int = 20)
     while k < untimed or not ended:
         ended |= step(k)
         k += 1
+    if timing:
+        timing()
     cpu = time.process_time()
     for j in range(steps):
         step(k + j)
