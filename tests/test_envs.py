@@ -108,7 +108,7 @@ def test_same_step_autoreset_returns_the_final_observation_and_a_fresh_start():
     fresh, _ = single.reset()
     assert np.array_equal(info["final_obs"][0]["persons"], final["persons"])
     assert np.array_equal(obs["persons"][0], fresh["persons"])
-    assert info["final_info"]["episode_metrics"][0]["timeout"]
+    assert info["final_info"]["episode_metrics"]["timeout"][0]
 
 
 def test_async_vector_env_runs():
@@ -347,15 +347,49 @@ def test_episode_log_grows_past_its_room_when_stepped_on():
     assert isinstance(episodes.episode_metrics(0)["path_length"], float)
 
 
-def test_vector_info_merges_key_by_key():
-    from crowdsim.envs.navigate import _merge
+def _same_tree(a, b, where="info"):
+    """Two vector infos alike: the same keys, arrays of the same dtype and values (NaN equal to NaN), observations
+    (``final_obs``'s dicts) equal."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict) and set(a) == set(b), (where, sorted(a), sorted(b))
+        for key in a:
+            _same_tree(a[key], b[key], f"{where}[{key!r}]")
+    elif isinstance(a, np.ndarray) and a.dtype == object:
+        assert b.dtype == object and len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            assert (x is None) == (y is None), (where, i)
+            if x is not None:
+                _same_tree(x, y, f"{where}[{i}]")
+    else:
+        assert a.dtype == b.dtype and np.array_equal(a, b, equal_nan=a.dtype.kind == "f"), (where, a, b)
 
-    out = _merge([{"a": 1.5, "m": {"x": 1}}, {}, {"a": 2.0, "b": True}])
-    assert list(out) == ["a", "_a", "m", "_m", "b", "_b"]
-    assert out["a"].dtype == float and out["a"].tolist() == [1.5, 0.0, 2.0] and out["_a"].tolist() == [1, 0, 1]
-    assert out["m"].tolist() == [{"x": 1}, None, None] and out["_m"].tolist() == [True, False, False]
-    assert out["b"].dtype == bool and out["b"].tolist() == [False, False, True]
-    assert _merge([{}, {}]) == {}
+
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP, AutoresetMode.DISABLED])
+def test_the_native_vector_info_is_gymnasiums_sync_vector_info(mode):
+    """The native vector environment's infos are what gymnasium's SyncVectorEnv gives for the same sub-environments,
+    key for key: a nested dict (``reward_terms``, ``episode_metrics``, ``final_info``) a dict of arrays over the
+    sub-environments with their masks, an episode's metrics where it ended, a restarting episode's info its reset's
+    (none), and in SAME_STEP an ended one's last step only in ``final_info``."""
+    kwargs = dict(num_envs=3, people=3, time_limit=0.6)
+    native = gym.make_vec("crowdsim/Navigate-v0", vectorization_mode="vector_entry_point", autoreset_mode=mode,
+                          **kwargs)
+    sync = gym.make_vec("crowdsim/Navigate-v0", vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode},
+                        **kwargs)
+    native.reset(seed=[0, 1, 2])
+    sync.reset(seed=[0, 1, 2])
+    actions = np.random.default_rng(0).uniform(-1, 1, (8, 3, 2)).astype(np.float32)
+    ends, ended = 0, np.zeros(3, bool)
+    for t, action in enumerate(actions):
+        if mode == AutoresetMode.DISABLED and ended.any():  # the user resets what ended
+            native.reset(options={"reset_mask": ended})
+            sync.reset(options={"reset_mask": ended})
+        _, _, terminated, truncated, got = native.step(action)
+        want = sync.step(action)[4]
+        ended = terminated | truncated
+        _same_tree(got, want, f"step {t}")
+        ends += int(got.get("_episode_metrics", np.zeros(3, bool)).sum()
+                    + got.get("final_info", {}).get("_episode_metrics", np.zeros(3, bool)).sum())
+    assert ends >= 6  # three episode ends each in at least two steps
 
 
 def test_unscored_episodes_get_no_episode_metrics():
@@ -363,6 +397,6 @@ def test_unscored_episodes_get_no_episode_metrics():
     episodes = Episodes(2, Config(people=2, time_limit=0.2))
     for k in range(2):
         episodes.reset(k, np.random.default_rng(k))
-    _, _, truncated, infos = episodes.step(np.zeros((2, 2)), unscored=np.array([True, False]))
+    _, _, truncated, step = episodes.step(np.zeros((2, 2)), unscored=np.array([True, False]))
     assert truncated.all()
-    assert "episode_metrics" not in infos[0] and "episode_metrics" in infos[1]
+    assert list(step.metrics) == [1] and "episode_metrics" not in step.of(0) and "episode_metrics" in step.of(1)

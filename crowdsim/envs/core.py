@@ -79,6 +79,26 @@ class Config:
             raise Error(f"time_limit: expected seconds above 0, got {self.time_limit}")
 
 
+@dataclass
+class StepInfo:
+    """A step's infos of every episode, as arrays [E] (the reward's terms by name, whether each collided and
+    succeeded, its time), and the episode metrics of those that ended (episode -> metrics)."""
+
+    terms: dict[str, np.ndarray]
+    collision: np.ndarray
+    success: np.ndarray
+    time: np.ndarray
+    metrics: dict[int, dict]
+
+    def of(self, k: int) -> dict:
+        """Episode k's info, as a single environment gives it."""
+        info = {"reward_terms": {name: float(value[k]) for name, value in self.terms.items()},
+                "collision": bool(self.collision[k]), "success": bool(self.success[k]), "time": float(self.time[k])}
+        if k in self.metrics:
+            info["episode_metrics"] = self.metrics[k]
+        return info
+
+
 class Episodes:
     """E episodes stepped together."""
 
@@ -192,9 +212,9 @@ class Episodes:
             self.tracks[k] = software.cycle(stamp).tracks
 
     def step(self, actions: np.ndarray, unscored: np.ndarray | None = None
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict]]:
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, StepInfo]:
         """One control period for every episode: actions [E, 2] in [-1, 1] scaled to the robot's limits. Returns
-        rewards, terminated, truncated [E] and one info per episode. Episodes ``unscored`` [E] (bool; a vector
+        rewards, terminated, truncated [E] and the episodes' infos. Episodes ``unscored`` [E] (bool; a vector
         environment's that start over after this step, their info dropped) get no episode metrics."""
         w = self.worlds
         command = np.minimum(np.maximum(np.asarray(actions, float).reshape(self.n, 2), -1.0), 1.0) * self.top_speed
@@ -217,13 +237,11 @@ class Episodes:
         truncated = ~terminated & (self.elapsed >= self.config.time_limit - 1e-9)
         rewards, terms = self.reward(self, before, gap, reached, collided)
         self._log(self.everyone, at_collision)
-        names = list(terms)
-        each = zip(*(terms[name].astype(float, copy=False).tolist() for name in names))  # per episode its terms
-        infos = [{"reward_terms": dict(zip(names, values)), "collision": c, "success": s, "time": t}
-                 for values, c, s, t in zip(each, collided.tolist(), reached.tolist(), self.elapsed.tolist())]
-        for k in np.flatnonzero((terminated | truncated) & (True if unscored is None else ~unscored)):
-            infos[k]["episode_metrics"] = self.episode_metrics(k)
-        return rewards, terminated, truncated, infos
+        metrics = {int(k): self.episode_metrics(k)
+                   for k in np.flatnonzero((terminated | truncated) & (True if unscored is None else ~unscored))}
+        info = StepInfo({name: value.astype(float) for name, value in terms.items()}, collided, reached,
+                        self.elapsed.copy(), metrics)
+        return rewards, terminated, truncated, info
 
     def _noise_draws(self) -> np.ndarray:
         """Every world's random force for this step [E, ticks, 2, N]: the next step of its block, a world whose block

@@ -14,7 +14,6 @@ the last step's info holds ``episode_metrics``.
 
 from __future__ import annotations
 
-import itertools
 import numbers
 
 import gymnasium as gym
@@ -25,7 +24,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from ..errors import Error
-from .core import Config, Episodes
+from .core import Config, Episodes, StepInfo
 from .record import EnvRecording
 from .render import top_down
 
@@ -62,10 +61,10 @@ class CrowdEnv(gym.Env):
         return _row(self.episodes.observe(), 0), {}
 
     def step(self, action):
-        rewards, terminated, truncated, infos = self.episodes.step(np.asarray(action, float)[None])
+        rewards, terminated, truncated, step = self.episodes.step(np.asarray(action, float)[None])
         if self.recording:
             self.recording.log(self.episodes)
-        return _row(self.episodes.observe(), 0), float(rewards[0]), bool(terminated[0]), bool(truncated[0]), infos[0]
+        return _row(self.episodes.observe(), 0), float(rewards[0]), bool(terminated[0]), bool(truncated[0]), step.of(0)
 
     def render(self):
         if self.render_mode == "rgb_array":
@@ -127,25 +126,44 @@ class CrowdVectorEnv(VectorEnv):
     def step(self, actions):
         actions = np.asarray(actions, float).reshape(self.num_envs, 2)
         restart = self._needs_reset.copy()
-        rewards, terminated, truncated, infos = self.episodes.step(actions, unscored=restart)
+        rewards, terminated, truncated, step = self.episodes.step(actions, unscored=restart)
         if self.autoreset_mode == AutoresetMode.NEXT_STEP and restart.any():
-            # the episodes that ended last step start over now; their action is ignored
+            # the episodes that ended last step start over now; their action is ignored, their info is their reset's
             for i in np.flatnonzero(restart):
                 self._reset_one(int(i), None)
             rewards[restart], terminated[restart], truncated[restart] = 0.0, False, False
-            infos = [{} if restart[i] else info for i, info in enumerate(infos)]
         ended = terminated | truncated
-        info = _merge(infos)
         if self.autoreset_mode == AutoresetMode.SAME_STEP and ended.any():
+            # the ended episodes start over now: their info is their reset's, with their last step's as final_info
             final_obs = self.episodes.observe()
             for i in np.flatnonzero(ended):
                 self._reset_one(int(i), None)
-            info["final_obs"] = _masked(final_obs, ended)
-            info["final_info"] = _merge([info_i if ended[i] else {} for i, info_i in enumerate(infos)])
-            info["_final_obs"] = info["_final_info"] = ended.copy()
+            info = self._batched(step, ~ended)
+            info["final_obs"], info["_final_obs"] = _masked(final_obs, ended), ended.copy()
+            info["final_info"], info["_final_info"] = self._batched(step, ended), ended.copy()
+        else:
+            info = self._batched(step, ~restart)
         self._needs_reset = ended if self.autoreset_mode == AutoresetMode.NEXT_STEP else np.zeros(self.num_envs,
                                                                                                       bool)
         return self.episodes.observe(), rewards, terminated, truncated, info
+
+    def _batched(self, step: StepInfo, shown: np.ndarray) -> dict:
+        """The step's infos of the sub-environments ``shown`` as gymnasium's vector info, what ``SyncVectorEnv``
+        gives for the same episodes: each key an array over sub-environments (zero where not shown) with its mask
+        ``_key``, a nested dict a dict of such arrays. Built from the step's arrays at once; the episode metrics of
+        the few that ended by gymnasium's own ``VectorEnv._add_info``."""
+        if not shown.any():
+            return {}
+        terms = {}
+        for name, value in step.terms.items():
+            terms[name], terms["_" + name] = np.where(shown, value, 0.0), shown.copy()
+        info = {"reward_terms": terms, "_reward_terms": shown.copy()}
+        for name, value in (("collision", step.collision), ("success", step.success), ("time", step.time)):
+            info[name], info["_" + name] = np.where(shown, value, np.zeros((), value.dtype)), shown.copy()
+        for k in sorted(step.metrics):
+            if shown[k]:
+                info = self._add_info(info, {"episode_metrics": step.metrics[k]}, k)
+        return info
 
     def render(self):
         if self.render_mode == "rgb_array":
@@ -162,20 +180,4 @@ def _masked(batch: dict[str, np.ndarray], mask: np.ndarray) -> np.ndarray:
     out = np.empty(len(mask), dtype=object)
     for i in range(len(mask)):
         out[i] = _row(batch, i) if mask[i] else None
-    return out
-
-
-def _merge(infos: list[dict]) -> dict:
-    """Per-sub-environment infos as gymnasium's vector info: each key an array over sub-environments (of the type of
-    its first value; a missing one 0, False or None), with ``_key`` marking where it is set. Key by key, not
-    element by element: one array a key."""
-    out: dict = {}
-    for key in dict.fromkeys(itertools.chain.from_iterable(infos)):  # in order of first appearance
-        mask = [key in info for info in infos]
-        kind = type(infos[mask.index(True)][key])
-        if kind in (bool, int, float):
-            out[key] = np.array([info.get(key, False) for info in infos], dtype=kind)
-        else:
-            out[key] = np.fromiter((info.get(key) for info in infos), dtype=object, count=len(infos))
-        out["_" + key] = np.array(mask)
     return out

@@ -58,7 +58,9 @@ def make_vec_env(envs: int, people: int, seed: int):
             for i in np.flatnonzero(dones):
                 infos[i]["terminal_observation"] = info["final_obs"][i]
                 infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
-                infos[i]["episode_metrics"] = info["final_info"]["episode_metrics"][i]
+                metrics = info["final_info"]["episode_metrics"]  # gymnasium's vector info: arrays and their masks
+                infos[i]["episode_metrics"] = {name: value[i].item() for name, value in metrics.items()
+                                               if not name.startswith("_")}
             return obs, rewards.astype(np.float32), dones, infos
 
         def close(self):
