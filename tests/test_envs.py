@@ -62,36 +62,42 @@ def test_another_seed_gives_another_crowd():
 @pytest.mark.parametrize("mode", ["truth", ("truth", "tracks")])
 def test_native_vector_env_episodes_equal_the_single_envs(mode):
     """Sub-environment i of the vector env reset with seed s is the single env reset with seed s + i, through
-    episode ends (next-step autoreset)."""
+    episode ends (next-step autoreset): observations, rewards and infos (``info_of``)."""
+    from crowdsim.envs.navigate import info_of
+
     n, steps, seed = 3, 60, 11
     actions = np.random.default_rng(2).uniform(-1, 1, (steps, n, 2))
     vec = gym.make_vec("crowdsim/Navigate-v0", num_envs=n, vectorization_mode="vector_entry_point",
                        observation=mode, people=8, time_limit=4.0)
     obs, _ = vec.reset(seed=seed)
-    vec_obs, vec_rewards, vec_done = [obs], [], []
+    vec_obs, vec_rewards, vec_done, vec_infos = [obs], [], [], []
     for t in range(steps):
-        obs, reward, terminated, truncated, _ = vec.step(actions[t])
+        obs, reward, terminated, truncated, info = vec.step(actions[t])
         vec_obs.append(obs)
         vec_rewards.append(reward)
         vec_done.append(terminated | truncated)
+        vec_infos.append(info)
     assert np.any(vec_done), "the time limit must end episodes within the test"
     for i in range(n):
         env = gym.make("crowdsim/Navigate-v0", observation=mode, people=8, time_limit=4.0)
         obs, _ = env.reset(seed=seed + i)
-        expected, rewards, restart = [obs], [], False
+        expected, rewards, infos, restart = [obs], [], [], False
         for t in range(steps):
             if restart:  # next-step autoreset: this step resets, its action is ignored
-                obs, _ = env.reset()
+                obs, info = env.reset()
                 reward, restart = 0.0, False
             else:
-                obs, reward, terminated, truncated, _ = env.step(actions[t, i])
+                obs, reward, terminated, truncated, info = env.step(actions[t, i])
                 restart = terminated or truncated
             expected.append(obs)
             rewards.append(reward)
+            infos.append(info)
         for t, single in enumerate(expected):
             for key in single:
                 assert np.array_equal(vec_obs[t][key][i], single[key]), (i, t, key)
         assert np.array_equal([r[i] for r in vec_rewards], rewards)
+        for t, single in enumerate(infos):  # NaN metrics compare equal through their repr
+            assert repr(info_of(vec_infos[t], i)) == repr(single), (i, t)
 
 
 def test_same_step_autoreset_returns_the_final_observation_and_a_fresh_start():

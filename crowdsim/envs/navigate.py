@@ -171,6 +171,19 @@ class CrowdVectorEnv(VectorEnv):
         return None
 
 
+def info_of(info: dict, i: int) -> dict:
+    """Sub-environment i's own info out of a vector info in gymnasium's layout (each key an array over the
+    sub-environments with its mask ``_key``, a nested dict in turn): the dict the single environment gives, numbers
+    as Python's."""
+    out = {}
+    for key, value in info.items():
+        if key.startswith("_") or not info["_" + key][i]:
+            continue
+        out[key] = info_of(value, i) if isinstance(value, dict) else (
+            value[i].item() if isinstance(value[i], np.generic) else value[i])
+    return out
+
+
 def _row(batch: dict[str, np.ndarray], i: int) -> dict[str, np.ndarray]:
     return {name: value[i] for name, value in batch.items()}
 

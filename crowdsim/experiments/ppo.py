@@ -32,7 +32,7 @@ def make_vec_env(envs: int, people: int, seed: int):
     from gymnasium.vector import AutoresetMode
     from stable_baselines3.common.vec_env import VecEnv
 
-    from crowdsim.envs.navigate import CrowdVectorEnv
+    from crowdsim.envs.navigate import CrowdVectorEnv, info_of
 
     class CrowdSB3(VecEnv):
         """stable-baselines3's conventions over ``CrowdVectorEnv``: ``dones`` = terminated or truncated, the last
@@ -58,9 +58,7 @@ def make_vec_env(envs: int, people: int, seed: int):
             for i in np.flatnonzero(dones):
                 infos[i]["terminal_observation"] = info["final_obs"][i]
                 infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
-                metrics = info["final_info"]["episode_metrics"]  # gymnasium's vector info: arrays and their masks
-                infos[i]["episode_metrics"] = {name: value[i].item() for name, value in metrics.items()
-                                               if not name.startswith("_")}
+                infos[i]["episode_metrics"] = info_of(info["final_info"], i)["episode_metrics"]
             return obs, rewards.astype(np.float32), dones, infos
 
         def close(self):
