@@ -65,7 +65,7 @@ GROUP_FILES = ("relations.csv", "groups.csv")
 def _cmd_evaluate(args) -> int:
     import json
 
-    from evaluation.group_score import groups_table, score_groups
+    from evaluation.group_score import GroupScore, groups_table
     from evaluation.io import EvaluationInputError, write_motchallenge
     from evaluation.score import (SEED000_COLUMNS, SEED001_COLUMNS, mean_sd, score_tracking, seeds_table,
                                   tracking_table)
@@ -88,23 +88,26 @@ def _cmd_evaluate(args) -> int:
         raise EvaluationInputError("--relations and --groups: expected both, with --gt and --tracks (--runs scores "
                                    "the groups of each run directory that has relations.csv and groups.csv)")
 
-    def group_scores(gt_path, tracks_path, relations_path, groups_path) -> dict:
-        return score_groups(gt_path, tracks_path, relations_path, groups_path, args.threshold,
-                            not args.no_occlusion, args.visible_column, args.max_range)
-
-    def files(gt_path, tracks_path) -> CsvPair:
+    def files(gt_path, tracks_path, groups: bool = False) -> CsvPair:
         return CsvPair(gt_path, tracks_path, occlusion=not args.no_occlusion, visible_column=args.visible_column,
-                       max_range=args.max_range)
+                       max_range=args.max_range, groups=groups)
+
+    def scores(pair: CsvPair, relations_path=None, groups_path=None) -> tuple[dict, dict | None]:
+        """The tracking scores of ``pair``, and with the two group files their group scores, in one reading."""
+        group_score = GroupScore(relations_path, groups_path) if relations_path else None
+        tracking = score_tracking(pair, args.threshold, group_score and group_score.add)
+        return tracking, group_score and group_score.result()
 
     if args.runs:
         if args.motchallenge is not None:
             raise EvaluationInputError("--motchallenge exports one pair of files: give --gt and --tracks")
-        runs = [score_tracking(files(Path(d) / "groundtruth.csv", Path(d) / "tracks.csv"), args.threshold)
-                for d in args.runs]
         # every file scored before anything is printed: a bad one is the one line printed
         with_groups = [Path(d) for d in args.runs if all((Path(d) / f).is_file() for f in GROUP_FILES)]
-        groups = [group_scores(*(d / f for f in ("groundtruth.csv", "tracks.csv", *GROUP_FILES)))
-                  for d in with_groups]
+        scored = [scores(files(d / "groundtruth.csv", d / "tracks.csv", True), *(d / f for f in GROUP_FILES))
+                  if d in with_groups else scores(files(d / "groundtruth.csv", d / "tracks.csv"))
+                  for d in map(Path, args.runs)]
+        runs = [tracking for tracking, _ in scored]
+        groups = [g for _, g in scored if g is not None]
         print(f"{len(runs)} runs at {args.threshold:g} m, mean and sample standard deviation")
         print(seeds_table(runs, SEED000_COLUMNS))
         print()
@@ -119,11 +122,12 @@ def _cmd_evaluate(args) -> int:
         if args.json:
             write_file(Path(args.json), json.dumps(report, indent=2) + "\n")
         return 0
-    pair = files(args.gt, args.tracks)
-    tracking = score_tracking(pair, args.threshold)
+    pair = files(args.gt, args.tracks, bool(args.relations))
+    # scored before anything is printed: a bad file is the one line printed
+    tracking, groups = scores(pair, args.relations, args.groups)
     report = {"tracking": tracking}
-    if args.relations:  # scored before anything is printed: a bad group file is the one line printed
-        report["groups"] = group_scores(args.gt, args.tracks, args.relations, args.groups)
+    if groups is not None:
+        report["groups"] = groups
     print(tracking_table(tracking))
     print(f"{tracking['frames']} frames; {pair.gt_ignored} ground-truth rows ignored (occluded or out of range); "
           f"threshold {args.threshold:g} m")

@@ -32,7 +32,7 @@ from evaluation.decimals import format_rows, plain_decimals
 from evaluation.heap import release_memory
 from evaluation.navigation import navigation_metrics, read_nav_run
 from evaluation.navigation_report import json_safe
-from evaluation.group_score import groups_table, score_groups
+from evaluation.group_score import GroupScore, groups_table
 from evaluation.score import score_tracking, tracking_table
 from evaluation.stream import CsvPair
 from pipeline.compiled import kernel
@@ -340,10 +340,10 @@ def _simulate(scenario: Scenario, tmp: Path, rrd: bool, progress: bool) -> dict:
     del sim, recording
     release_memory()
     # scored from the files as written, so that `crowdsim evaluate` on them gives the same figures
-    tracking = score_tracking(CsvPair(tmp / GROUNDTRUTH.file, tmp / TRACKS.file),
-                              scenario.evaluation.threshold)
-    groups = score_groups(*(tmp / c.file for c in (GROUNDTRUTH, TRACKS, RELATIONS, GROUPS)),
-                          scenario.evaluation.threshold)
+    group_score = GroupScore(tmp / RELATIONS.file, tmp / GROUPS.file)
+    tracking = score_tracking(CsvPair(tmp / GROUNDTRUTH.file, tmp / TRACKS.file, groups=True),
+                              scenario.evaluation.threshold, group_score.add)
+    groups = group_score.result()
     release_memory()  # and the scoring's memory before the drawing's
     from .plot import plot_run  # matplotlib, imported once the scoring is done: 20 MB less at its peak
 

@@ -2,22 +2,22 @@
 tracks.csv, relations.csv and groups.csv, read a chunk at a time and met frame by frame, so the run and
 ``crowdsim evaluate`` give the same figures from the same files, in constant memory.
 
-Tracks are mapped to persons by CLEAR-MOT's matching at the run's threshold (the same as the tracking scores'), and
-the metrics are evaluation/groups.py's.
+Tracks are mapped to persons by CLEAR-MOT's matching at the run's threshold, the tracking scores' own: a run and
+``crowdsim evaluate`` score both from one reading of the ground truth and the tracks (``GroupScore`` fed by
+``score.score_tracking``). The metrics are evaluation/groups.py's.
 """
 
 from __future__ import annotations
 
-import heapq
-
 import numpy as np
 
 from .clearmot import ClearMot
-from .columns import GROUNDTRUTH, GROUPS, RELATIONS
+from .columns import GROUPS, RELATIONS
 from .groups import GroupFrame, GroupMetrics
-from .io import REQUIRED, EvaluationInputError, Ignored, table_chunks
+from .io import EvaluationInputError, table_chunks
 from .score import pct
 from .sequence import Sequence
+from .stream import CsvPair
 
 RELATIONS_COLUMNS = RELATIONS.pick("frame", "track_a", "track_b", "strength")
 GROUPS_COLUMNS = GROUPS.pick("frame", "group", "id")
@@ -42,55 +42,79 @@ def frame_rows(path, required: tuple[str, ...], read: tuple[str, ...] = ()):
         yield int(held["frame"][0]), held
 
 
-def merged(*streams):
-    """(frame, [each stream's columns of that frame, or None]) over the union of the streams' frames, in order."""
-    def tag(k, stream):
-        return ((frame, k, rows) for frame, rows in stream)
+class GroupScore:
+    """The group metrics of relations.csv and groups.csv, given the ground truth a chunk at a time with CLEAR-MOT's
+    matching of its frames (``add``, the ``matched`` of ``score.counted_chunks``: the tracking scores' reading and
+    matching serve both); a frame of the two files that neither the ground truth nor the tracks have is scored with
+    no persons. ``result`` once every chunk is given."""
 
-    tagged = [tag(k, stream) for k, stream in enumerate(streams)]
-    current, parts = None, [None] * len(streams)
-    for frame, k, rows in heapq.merge(*tagged, key=lambda item: (item[0], item[1])):
-        if frame != current and current is not None:
-            yield current, parts
-            parts = [None] * len(streams)
-        current, parts[k] = frame, rows
-    if current is not None:
-        yield current, parts
+    def __init__(self, relations_path, groups_path):
+        self._streams = (frame_rows(relations_path, RELATIONS_COLUMNS), frame_rows(groups_path, GROUPS_COLUMNS))
+        self._heads = [next(stream, None) for stream in self._streams]  # each file's next (frame, columns)
+        self.metrics = GroupMetrics()
+
+    def add(self, gt: Sequence, results) -> None:
+        """A chunk of ground truth (with its ``group`` column) and its frames' (frame, ClearMot FrameResult)."""
+        if gt.group is None:
+            raise ValueError("GroupScore needs the ground truth's group column (CsvPair(..., groups=True))")
+        bounds = gt.bounds(np.array([frame for frame, _ in results], np.int64))
+        for k, (frame, result) in enumerate(results):
+            self._before(frame)
+            rows = slice(bounds[k], bounds[k + 1])
+            counted = ~gt.ignore[rows]
+            self._update(frame, gt.id[rows][counted], gt.group[rows][counted], gt.position[rows][counted], result)
+
+    def result(self) -> dict:
+        self._before(None)
+        return self.metrics.summary()
+
+    def _before(self, frame: int | None) -> None:
+        """The files' frames before ``frame`` (all that are left: None), scored without persons."""
+        while True:
+            first = min((head[0] for head in self._heads if head is not None), default=None)
+            if first is None or (frame is not None and first >= frame):
+                return
+            self._update(first, _NO_IDS, _NO_IDS, np.zeros((0, 2)), None)
+
+    def _update(self, frame: int, gt_id, gt_group, gt_position, result) -> None:
+        relations, groups = self._take(frame)
+        self.metrics.update(GroupFrame(
+            gt_id=gt_id, gt_group=gt_group, gt_position=gt_position,
+            matched_gt=_NO_IDS if result is None else result.matched_gt_ids,
+            matched_track=_NO_IDS if result is None else result.matched_hyp_ids,
+            excused_track=_NO_IDS if result is None else result.excused_hyp_ids,
+            relation_a=_ints(relations, "track_a"), relation_b=_ints(relations, "track_b"),
+            relation_strength=np.zeros(0) if relations is None else relations["strength"],
+            group_id=_ints(groups, "group"), group_track=_ints(groups, "id")))
+
+    def _take(self, frame: int) -> list:
+        """Each file's columns of ``frame`` (None where it has no row there), the files read on past it."""
+        taken = []
+        for k, head in enumerate(self._heads):
+            if head is not None and head[0] == frame:
+                taken.append(head[1])
+                self._heads[k] = next(self._streams[k], None)
+            else:
+                taken.append(None)
+        return taken
+
+
+_NO_IDS = np.zeros(0, np.int64)
 
 
 def _ints(rows, name) -> np.ndarray:
-    return np.zeros(0, np.int64) if rows is None else rows[name].astype(np.int64)
+    return _NO_IDS if rows is None else rows[name].astype(np.int64)
 
 
 def score_groups(gt_path, tracks_path, relations_path, groups_path, threshold: float = 1.0,
                  occlusion: bool = True, visible_column: str | None = None, max_range: float | None = None) -> dict:
     """The group metrics of a run's four files (evaluation/groups.py ``GroupMetrics.summary``); the ground truth's
-    ignored rows as ``io.Ignored`` says."""
-    ignored = Ignored(occlusion, visible_column, max_range)
-    streams = (frame_rows(gt_path, (*REQUIRED, *GROUNDTRUTH.pick("group")), ignored.columns),
-               frame_rows(tracks_path, REQUIRED), frame_rows(relations_path, RELATIONS_COLUMNS),
-               frame_rows(groups_path, GROUPS_COLUMNS))
-    cm, metrics = ClearMot(threshold), GroupMetrics()
-    for frame, (gt, tracks, relations, groups) in merged(*streams):
-        gt_ids, track_ids = _ints(gt, "id"), _ints(tracks, "id")
-        gt_xy = np.zeros((0, 2)) if gt is None else np.column_stack([gt["x"], gt["y"]])
-        track_xy = np.zeros((0, 2)) if tracks is None else np.column_stack([tracks["x"], tracks["y"]])
-        ignore = np.zeros(0, bool) if gt is None else ignored(gt, gt_path)
-        result = None
-        if len(gt_ids) or len(track_ids):
-            seq_gt = Sequence.from_rows(np.full(len(gt_ids), frame), gt_ids, gt_xy, ignore=ignore)
-            seq_tr = Sequence.from_rows(np.full(len(track_ids), frame), track_ids, track_xy)
-            (_, result), = cm.scored_frames(seq_gt, seq_tr)
-        counted = ~ignore
-        metrics.update(GroupFrame(
-            gt_id=gt_ids[counted], gt_group=_ints(gt, "group")[counted], gt_position=gt_xy[counted],
-            matched_gt=result.matched_gt_ids if result else np.zeros(0, np.int64),
-            matched_track=result.matched_hyp_ids if result else np.zeros(0, np.int64),
-            excused_track=result.excused_hyp_ids if result else np.zeros(0, np.int64),
-            relation_a=_ints(relations, "track_a"), relation_b=_ints(relations, "track_b"),
-            relation_strength=np.zeros(0) if relations is None else relations["strength"],
-            group_id=_ints(groups, "group"), group_track=_ints(groups, "id")))
-    return metrics.summary()
+    ignored rows as ``io.Ignored`` says. (With the tracking scores too: ``score_tracking(CsvPair(..., groups=True),
+    threshold, GroupScore(...).add)``, one reading and matching for both.)"""
+    scores, cm = GroupScore(relations_path, groups_path), ClearMot(threshold)
+    for gt, tracks in CsvPair(gt_path, tracks_path, occlusion, visible_column, max_range, groups=True):
+        scores.add(gt, list(cm.scored_frames(gt, tracks)))
+    return scores.result()
 
 
 def groups_table(groups: dict, extra: dict[str, str] | None = None) -> str:

@@ -27,7 +27,7 @@ import numpy as np
 from scenarios.errors import Error
 
 from . import decimals
-from .columns import FLAGS, SHARES, TRACKS, WHOLE
+from .columns import FLAGS, GROUNDTRUTH, SHARES, TRACKS, WHOLE
 from .sequence import Sequence
 
 REQUIRED = TRACKS.pick("frame", "id", "x", "y")  # of any ground truth or tracks file
@@ -238,7 +238,7 @@ class Ignored:
 def _sequence(rows: dict, path) -> Sequence:
     """Rows of whole frames as a Sequence sorted by frame and id; ids must be unique within a frame."""
     seq = Sequence.from_rows(rows["frame"], rows["id"], np.column_stack([rows["x"], rows["y"]]), rows.get("t"),
-                             rows["ignore"])
+                             rows["ignore"], rows.get("group"))
     dup = (np.diff(seq.frame) == 0) & (np.diff(seq.id) == 0) if len(seq) > 1 else np.zeros(0, bool)
     if dup.any():
         k = int(np.flatnonzero(dup)[0])
@@ -248,16 +248,20 @@ def _sequence(rows: dict, path) -> Sequence:
 
 
 def sequence_chunks(path, occlusion: bool = True, visible_column: str | None = None,
-                    max_range: float | None = None, chunk_rows: int = CHUNK_ROWS):
+                    max_range: float | None = None, chunk_rows: int = CHUNK_ROWS, groups: bool = False):
     """A ground-truth or track file as Sequences of whole frames, in frame order: the rows of the frame a chunk
-    ends in are held back and joined to the next chunk's. Ignored rows as ``Ignored`` says."""
+    ends in are held back and joined to the next chunk's. Ignored rows as ``Ignored`` says; with ``groups``, the
+    ground truth's ``group`` column too (required)."""
     ignored = Ignored(occlusion, visible_column, max_range)
     held = None
-    for table in table_chunks(path, read=("t", *ignored.columns), chunk_rows=chunk_rows):
+    required = (*REQUIRED, *GROUNDTRUTH.pick("group")) if groups else REQUIRED
+    for table in table_chunks(path, required, read=("t", *ignored.columns), chunk_rows=chunk_rows):
         rows = {"frame": table["frame"].astype(np.int64), "id": table["id"].astype(np.int64), "x": table["x"],
                 "y": table["y"], "ignore": ignored(table, path)}
         if "t" in table:
             rows["t"] = table["t"]
+        if groups:
+            rows["group"] = table["group"].astype(np.int64)
         if held is not None:
             rows = {name: np.concatenate([held[name], rows[name]]) for name in rows}
         frame = rows["frame"]

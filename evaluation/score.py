@@ -18,16 +18,20 @@ from .ospa import Ospa, OspaResult
 OSPA_CUTOFF, OSPA_ORDER = 1.0, 1.0  # m; the issue's c = 1 m, p = 1 (SPENCER's online_analysis uses the same)
 
 
-def counted_chunks(frames, threshold: float):
+def counted_chunks(frames, threshold: float, matched=None):
     """The chunks of ``frames`` (aligned (gt, tracks) Sequences) as HOTA and OSPA see them: the ground truth not
     ignored, and the tracks but those CLEAR-MOT matched to an ignored person (which are no false positives there
-    either); and the ClearMot that decided it, filled once the iteration ends."""
+    either); and the ClearMot that decided it, filled once the iteration ends. ``matched``: called with each chunk's
+    ground truth and its frames' (frame, FrameResult), CLEAR-MOT's matching for another metric (the groups')."""
     cm = ClearMot(threshold)
 
     def chunks():
         for gt, tracks in frames:
+            results = list(cm.scored_frames(gt, tracks))
+            if matched is not None:
+                matched(gt, results)
             excused = [(np.full(len(r.excused_hyp_ids), frame), r.excused_hyp_ids)
-                       for frame, r in cm.scored_frames(gt, tracks) if len(r.excused_hyp_ids)]
+                       for frame, r in results if len(r.excused_hyp_ids)]
             keep = np.ones(len(tracks), bool)
             if excused:
                 ids = np.unique(tracks.id)
@@ -39,13 +43,14 @@ def counted_chunks(frames, threshold: float):
     return chunks(), cm
 
 
-def score_tracking(frames, threshold: float = 1.0) -> dict:
+def score_tracking(frames, threshold: float = 1.0, matched=None) -> dict:
     """CLEAR-MOT, rIDS, MT/PT/ML, fragmentations, the id swap split and IDF1 of the tracks against the ground truth
     of ``frames`` (re-iterable aligned chunks: ``stream.CsvPair`` or ``stream.SequencePair``); then HOTA and OSPA on
     what counts (``counted_chunks``): metrics.json's tracking object. Two passes over ``frames``: HOTA's alignment
-    and OSPA-T's labels are global (evaluation/metric.py)."""
+    and OSPA-T's labels are global (evaluation/metric.py). ``matched``: as ``counted_chunks`` takes it, called in
+    the first pass only (``group_score.GroupScore.add``: the group metrics on the same reading and matching)."""
     h, o = Hota(), Ospa(OSPA_CUTOFF, OSPA_ORDER)
-    chunks, cm = counted_chunks(frames, threshold)
+    chunks, cm = counted_chunks(frames, threshold, matched)
     for gt, tracks in chunks:
         h.add(gt, tracks)
         o.add(gt, tracks)

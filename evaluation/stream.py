@@ -49,13 +49,14 @@ _EMPTY = Sequence(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 2))
 
 class CsvPair:
     """A ground-truth file and a track file (the layout ``crowdsim run`` writes) as aligned chunks, read anew at
-    each iteration. After an iteration, ``gt_rows``, ``gt_ignored`` and ``first_frame`` (of either file; None when
+    each iteration; with ``groups``, the ground truth's group column too. After an iteration, ``gt_rows``, ``gt_ignored`` and ``first_frame`` (of either file; None when
     both are empty) describe what was read."""
 
     def __init__(self, gt_path, tracks_path, occlusion: bool = True, visible_column: str | None = None,
-                 max_range: float | None = None, chunk_rows: int = CHUNK_ROWS):
+                 max_range: float | None = None, chunk_rows: int = CHUNK_ROWS, groups: bool = False):
         self.gt_path, self.tracks_path = gt_path, tracks_path
-        self.options = {"occlusion": occlusion, "visible_column": visible_column, "max_range": max_range}
+        self.options = {"occlusion": occlusion, "visible_column": visible_column, "max_range": max_range,
+                        "groups": groups}
         self.chunk_rows = chunk_rows
         self.gt_rows = self.gt_ignored = 0
         self.first_frame = None
